@@ -1,0 +1,1 @@
+//! Benchmarks live in drape.rs; this library is empty on purpose.

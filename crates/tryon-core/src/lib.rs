@@ -1,0 +1,16 @@
+//! tryon-core: the vocabulary every stage shares — math aliases, polygon meshes with their topology,
+//! the plain-data frames passed between stages, and the object-safe stage traits with trivial
+//! implementations so each stage can be tested alone.
+
+pub mod frames;
+pub mod math;
+pub mod mesh;
+pub mod pose;
+pub mod shapes;
+pub mod stages;
+pub mod topology;
+
+pub use frames::{BodyFrame, CoarseFrame, Contact, FineSurface, FineVertexSource, StepReport};
+pub use math::{Real, Vec3};
+pub use mesh::{Face, MeshError, PolyMesh};
+pub use topology::{Topology, TopologyError};

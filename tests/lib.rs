@@ -1,0 +1,1 @@
+//! Integration tests live in root.rs; this library is empty on purpose.
