@@ -1,0 +1,294 @@
+//! The cloth model built once from a mesh: springs (structure-of-arrays), lumped masses, pins and
+//! kinematic handles.
+
+use crate::params::{ClothParams, ParamError};
+use std::collections::HashSet;
+use std::ops::Range;
+use thiserror::Error;
+use tryon_core::math::{Real, Vec3};
+use tryon_core::mesh::{Face, PolyMesh};
+use tryon_core::topology::{NO_FACE, Topology, TopologyError};
+
+/// Which family a spring belongs to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SpringKind {
+    /// On mesh edges; asymmetric stiffness (P1 eq. 1).
+    Structural,
+    /// Across quad diagonals.
+    Shear,
+    /// Skipping one vertex across each interior edge (bending).
+    Bend,
+}
+
+/// Springs as structure-of-arrays.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SpringSet {
+    pub i: Vec<u32>,
+    pub j: Vec<u32>,
+    pub rest: Vec<Real>,
+    /// Stiffness when longer than rest (N/m).
+    pub k_stretch: Vec<Real>,
+    /// Stiffness when shorter than rest (N/m).
+    pub k_compress: Vec<Real>,
+    /// Viscous damping along the spring (N s/m).
+    pub damping: Vec<Real>,
+}
+
+impl SpringSet {
+    /// Number of springs.
+    pub fn len(&self) -> usize {
+        self.i.len()
+    }
+
+    /// True when there are no springs.
+    pub fn is_empty(&self) -> bool {
+        self.i.is_empty()
+    }
+
+    fn push(&mut self, a: u32, b: u32, rest: Real, ks: Real, kc: Real, c: Real) {
+        self.i.push(a);
+        self.j.push(b);
+        self.rest.push(rest);
+        self.k_stretch.push(ks);
+        self.k_compress.push(kc);
+        self.damping.push(c);
+    }
+}
+
+/// A particle that follows a scripted path (piecewise linear in time), as when P4's user drags the cloth.
+/// A path with a single key is a pin.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Handle {
+    pub particle: u32,
+    /// (time s, position m), times ascending.
+    pub path: Vec<(Real, Vec3)>,
+}
+
+impl Handle {
+    /// Position on the path at time t (held constant before the first and after the last key).
+    pub fn position(&self, t: Real) -> Vec3 {
+        let p = &self.path;
+        if t <= p[0].0 {
+            return p[0].1;
+        }
+        for w in p.windows(2) {
+            let ((t0, a), (t1, b)) = (w[0], w[1]);
+            if t <= t1 {
+                let s = if t1 > t0 { (t - t0) / (t1 - t0) } else { 1.0 };
+                return a + (b - a) * s;
+            }
+        }
+        p[p.len() - 1].1
+    }
+
+    /// Velocity on the path at time t (the slope of the segment holding t).
+    pub fn velocity(&self, t: Real) -> Vec3 {
+        for w in self.path.windows(2) {
+            let ((t0, a), (t1, b)) = (w[0], w[1]);
+            if t >= t0 && t < t1 {
+                return (b - a) / (t1 - t0);
+            }
+        }
+        Vec3::zeros()
+    }
+}
+
+/// Why a cloth model could not be built.
+#[derive(Debug, Error, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum BuildClothError {
+    #[error("cloth mesh: {0}")]
+    Topology(#[from] TopologyError),
+    #[error(transparent)]
+    Param(#[from] ParamError),
+    #[error("handle on particle {particle}, but the cloth has only {count} particles")]
+    HandleOutOfRange { particle: u32, count: usize },
+    #[error("handle on particle {particle} has an empty path")]
+    EmptyHandlePath { particle: u32 },
+    #[error("handle on particle {particle}: key {key} is not finite or its time goes backwards")]
+    BadHandleKey { particle: u32, key: usize },
+}
+
+/// Everything about a cloth that does not change while it moves.
+#[derive(Clone, Debug)]
+pub struct ClothModel {
+    pub springs: SpringSet,
+    /// Index ranges of each kind in `springs`: structural, shear, bend.
+    pub structural: Range<usize>,
+    pub shear: Range<usize>,
+    pub bend: Range<usize>,
+    pub mass: Vec<Real>,
+    /// 0 for pinned and handled particles.
+    pub inv_mass: Vec<Real>,
+    /// Area lumped to each particle (m^2), for air drag.
+    pub area: Vec<Real>,
+    pub handles: Vec<Handle>,
+    pub topology: Topology,
+    /// Triangulated view of the cloth mesh.
+    pub triangles: Vec<[u32; 3]>,
+    pub rest_positions: Vec<Vec3>,
+}
+
+impl ClothModel {
+    /// Builds springs and masses from `mesh` at its current shape (which is the rest shape).
+    pub fn build(mesh: &PolyMesh, params: &ClothParams, handles: Vec<Handle>) -> Result<Self, BuildClothError> {
+        params.validate()?;
+        let topology = Topology::build(mesh)?;
+        let n = mesh.positions.len();
+        for h in &handles {
+            if h.particle as usize >= n {
+                return Err(BuildClothError::HandleOutOfRange { particle: h.particle, count: n });
+            }
+            if h.path.is_empty() {
+                return Err(BuildClothError::EmptyHandlePath { particle: h.particle });
+            }
+            for (k, (t, p)) in h.path.iter().enumerate() {
+                let backwards = k > 0 && *t < h.path[k - 1].0;
+                if !t.is_finite() || !tryon_core::math::is_finite(p) || backwards {
+                    return Err(BuildClothError::BadHandleKey { particle: h.particle, key: k });
+                }
+            }
+        }
+        let pos = &mesh.positions;
+        let mut springs = SpringSet::default();
+        let c = params.spring_damping;
+        let add = |s: &mut SpringSet, a: u32, b: u32, ks: Real, kc: Real| {
+            let rest = (pos[a as usize] - pos[b as usize]).norm();
+            s.push(a, b, rest, ks, kc, c);
+        };
+        for &[a, b] in &topology.edges {
+            add(&mut springs, a, b, params.k_stretch, params.k_compress);
+        }
+        let structural = 0..springs.len();
+        for f in &mesh.faces {
+            if let Face::Quad([a, b, cc, d]) = *f {
+                add(&mut springs, a, cc, params.k_shear, params.k_shear);
+                add(&mut springs, b, d, params.k_shear, params.k_shear);
+            }
+        }
+        let shear = structural.end..springs.len();
+        for (a, b) in bend_pairs(mesh, &topology) {
+            add(&mut springs, a, b, params.k_bend, params.k_bend);
+        }
+        let bend = shear.end..springs.len();
+
+        let (triangles, _) = mesh.triangulate();
+        let mut area = vec![0.0; n];
+        for t in &triangles {
+            let [a, b, cc] = t.map(|v| pos[v as usize]);
+            let third = 0.5 * (b - a).cross(&(cc - a)).norm() / 3.0;
+            for &v in t {
+                area[v as usize] += third;
+            }
+        }
+        let mass: Vec<Real> = area.iter().map(|a| a * params.density).collect();
+        let mut inv_mass: Vec<Real> = mass.iter().map(|m| if *m > 0.0 { 1.0 / m } else { 0.0 }).collect();
+        for h in &handles {
+            inv_mass[h.particle as usize] = 0.0;
+        }
+        Ok(ClothModel {
+            springs,
+            structural,
+            shear,
+            bend,
+            mass,
+            inv_mass,
+            area,
+            handles,
+            topology,
+            triangles,
+            rest_positions: pos.clone(),
+        })
+    }
+
+    /// Number of particles.
+    pub fn particle_count(&self) -> usize {
+        self.mass.len()
+    }
+
+    /// Total mass (kg).
+    pub fn total_mass(&self) -> Real {
+        self.mass.iter().sum()
+    }
+}
+
+/// Bending pairs: across each interior edge (a, b) with faces F and G, for each end v of the edge, the
+/// neighbour of v in F other than the edge's other end is joined to the neighbour of v in G. On a
+/// quad grid this is exactly Provot's flexion spring (i-1 to i+1); on triangles it joins the two
+/// vertices opposite the edge.
+fn bend_pairs(mesh: &PolyMesh, topo: &Topology) -> Vec<(u32, u32)> {
+    let mut seen = HashSet::new();
+    let mut out = Vec::new();
+    for (e, &[a, b]) in topo.edges.iter().enumerate() {
+        let [f, g] = topo.edge_faces[e];
+        if g == NO_FACE {
+            continue;
+        }
+        for (v, other) in [(a, b), (b, a)] {
+            let p = neighbour_in_face(mesh.faces[f as usize].vertices(), v, other);
+            let q = neighbour_in_face(mesh.faces[g as usize].vertices(), v, other);
+            if let (Some(p), Some(q)) = (p, q)
+                && p != q
+                && seen.insert((p.min(q), p.max(q)))
+            {
+                out.push((p.min(q), p.max(q)));
+            }
+        }
+    }
+    out
+}
+
+/// The neighbour of `v` around `face` that is not `other`.
+fn neighbour_in_face(face: &[u32], v: u32, other: u32) -> Option<u32> {
+    let k = face.iter().position(|&x| x == v)?;
+    let n = face.len();
+    let (prev, next) = (face[(k + n - 1) % n], face[(k + 1) % n]);
+    if prev == other { Some(next) } else { Some(prev) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use tryon_core::mesh::grid_xz;
+
+    #[test]
+    fn grid_springs_follow_provot() {
+        let n = 4;
+        let m = grid_xz(n, n, 1.0, 1.0, 0.0);
+        let model = ClothModel::build(&m, &ClothParams::default(), vec![]).unwrap();
+        assert_eq!(model.structural.len(), 2 * n * (n + 1));
+        assert_eq!(model.shear.len(), 2 * n * n);
+        // Flexion springs: every row and column, skipping one: 2 * (n+1) * (n-1).
+        assert_eq!(model.bend.len(), 2 * (n + 1) * (n - 1));
+        let h = 1.0 / n as Real;
+        for s in model.bend.clone() {
+            assert!((model.springs.rest[s] - 2.0 * h).abs() < 1e-12, "bend spring {s} not 2h");
+        }
+        assert!((model.total_mass() - 0.2).abs() < 1e-12);
+    }
+
+    #[test]
+    fn handle_path_interpolates() {
+        let h = Handle { particle: 0, path: vec![(0.0, Vec3::zeros()), (1.0, Vec3::new(2.0, 0.0, 0.0))] };
+        assert_eq!(h.position(0.5), Vec3::new(1.0, 0.0, 0.0));
+        assert_eq!(h.position(3.0), Vec3::new(2.0, 0.0, 0.0));
+        assert_eq!(h.velocity(0.5), Vec3::new(2.0, 0.0, 0.0));
+        assert_eq!(h.velocity(1.5), Vec3::zeros());
+    }
+
+    #[test]
+    fn bad_handles_are_named() {
+        let m = grid_xz(2, 2, 1.0, 1.0, 0.0);
+        let p = ClothParams::default();
+        let e = ClothModel::build(&m, &p, vec![Handle { particle: 99, path: vec![(0.0, Vec3::zeros())] }]);
+        assert_eq!(e.unwrap_err(), BuildClothError::HandleOutOfRange { particle: 99, count: 9 });
+        let bad = vec![Handle { particle: 1, path: vec![(1.0, Vec3::zeros()), (0.5, Vec3::zeros())] }];
+        assert_eq!(
+            ClothModel::build(&m, &p, bad).unwrap_err(),
+            BuildClothError::BadHandleKey { particle: 1, key: 1 }
+        );
+        let p = ClothParams { density: -1.0, ..ClothParams::default() };
+        let msg = ClothModel::build(&m, &p, vec![]).unwrap_err().to_string();
+        assert!(msg.contains("density") && msg.contains("-1"), "{msg}");
+    }
+}

@@ -1,0 +1,253 @@
+//! The frame loop of the coarse cloth: substeps chosen for stability, handles, Provot's strain limit,
+//! collision with Coulomb friction, and the guard that rejects a non-finite or exploding substep,
+//! retries it at half the step, and as a last resort rolls offending particles back.
+
+use crate::forces::{accelerations, stiffness_bounds};
+use crate::integrator::{Derivative, Integrator, IntegratorKind};
+use crate::model::ClothModel;
+use crate::params::ClothParams;
+use crate::strain::limit_strain;
+use tryon_core::frames::{CoarseFrame, Contact, StepReport};
+use tryon_core::math::{Real, Vec3, is_finite};
+use tryon_core::stages::{ClothSolver, Collider};
+
+/// A cloth simulation: the model, its parameters, an integrator and scratch memory. The state lives in
+/// the caller's [`CoarseFrame`].
+pub struct ClothSim {
+    pub model: ClothModel,
+    pub params: ClothParams,
+    integrator: Box<dyn Integrator>,
+    /// Substep the stability bound allows (s).
+    stable_substep: Real,
+    force: Vec<Vec3>,
+    elastic: Vec<Vec3>,
+    backup_x: Vec<Vec3>,
+    backup_v: Vec<Vec3>,
+    pre_limit: Vec<Vec3>,
+    contacts: Vec<Contact>,
+}
+
+impl std::fmt::Debug for ClothSim {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ClothSim")
+            .field("particles", &self.model.particle_count())
+            .field("springs", &self.model.springs.len())
+            .field("integrator", &self.integrator.name())
+            .field("stable_substep", &self.stable_substep)
+            .finish()
+    }
+}
+
+/// The force evaluation handed to the integrator.
+struct Rhs<'a> {
+    model: &'a ClothModel,
+    params: &'a ClothParams,
+    force: &'a mut Vec<Vec3>,
+    elastic: &'a mut Vec<Vec3>,
+    record: bool,
+}
+
+impl Derivative for Rhs<'_> {
+    fn accelerations(&mut self, x: &[Vec3], v: &[Vec3], a: &mut [Vec3], first: bool) {
+        let elastic = if first && self.record { Some(self.elastic.as_mut_slice()) } else { None };
+        accelerations(self.model, self.params, x, v, self.force, elastic, a);
+    }
+}
+
+impl ClothSim {
+    /// A simulation of `model` with one of the built-in integrators.
+    pub fn new(model: ClothModel, params: ClothParams, kind: IntegratorKind) -> Self {
+        Self::with_integrator(model, params, kind.make())
+    }
+
+    /// A simulation of `model` with any integrator.
+    pub fn with_integrator(model: ClothModel, params: ClothParams, integrator: Box<dyn Integrator>) -> Self {
+        let n = model.particle_count();
+        let (omega, damp) = stiffness_bounds(&model);
+        let bound = 0.9 * integrator.stability_limit() / (omega + damp).max(1e-12);
+        let stable_substep = if params.auto_substep { params.max_substep.min(bound) } else { params.max_substep };
+        let z = vec![Vec3::zeros(); n];
+        ClothSim {
+            model,
+            params,
+            integrator,
+            stable_substep,
+            force: z.clone(),
+            elastic: z.clone(),
+            backup_x: z.clone(),
+            backup_v: z.clone(),
+            pre_limit: z,
+            contacts: Vec::new(),
+        }
+    }
+
+    /// The substep used when nothing goes wrong (s).
+    pub fn nominal_substep(&self) -> Real {
+        self.stable_substep
+    }
+
+    /// Name of the integrator.
+    pub fn integrator_name(&self) -> &'static str {
+        self.integrator.name()
+    }
+
+    /// The rest state, with handles at their path start.
+    pub fn initial_frame(&self) -> CoarseFrame {
+        let mut f = CoarseFrame::at_rest(self.model.rest_positions.clone());
+        for h in &self.model.handles {
+            f.positions[h.particle as usize] = h.position(0.0);
+        }
+        f
+    }
+
+    /// One substep from absolute time `t`. Returns (non-finite particles, exploding particles).
+    fn substep(&mut self, frame: &mut CoarseFrame, t: Real, h: Real, record: bool, collider: &mut dyn Collider) -> (u32, u32) {
+        let (x, v) = (&mut frame.positions, &mut frame.velocities);
+        for hd in &self.model.handles {
+            x[hd.particle as usize] = hd.position(t);
+            v[hd.particle as usize] = hd.velocity(t);
+        }
+        let mut rhs = Rhs {
+            model: &self.model,
+            params: &self.params,
+            force: &mut self.force,
+            elastic: &mut self.elastic,
+            record,
+        };
+        self.integrator.step(&mut rhs, x, v, h);
+        for hd in &self.model.handles {
+            x[hd.particle as usize] = hd.position(t + h);
+        }
+        if let Some(ratio) = self.params.max_strain {
+            self.pre_limit.copy_from_slice(x);
+            limit_strain(&self.model, ratio, self.params.strain_iterations, x);
+            let inv_h = 1.0 / h;
+            for i in 0..x.len() {
+                v[i] += (x[i] - self.pre_limit[i]) * inv_h;
+            }
+        }
+        self.contacts.clear();
+        collider.resolve(x, &mut self.contacts);
+        let mu = self.params.friction;
+        for c in &self.contacts {
+            let p = c.point as usize;
+            if self.model.inv_mass[p] == 0.0 {
+                continue;
+            }
+            v[p] = contact_velocity(v[p], c.normal, c.body_velocity, mu);
+        }
+        for hd in &self.model.handles {
+            x[hd.particle as usize] = hd.position(t + h);
+        }
+        let max2 = self.params.max_speed * self.params.max_speed;
+        let (mut nonfinite, mut fast) = (0, 0);
+        for i in 0..x.len() {
+            if !is_finite(&x[i]) || !is_finite(&v[i]) {
+                nonfinite += 1;
+            } else if v[i].norm_squared() > max2 {
+                fast += 1;
+            }
+        }
+        (nonfinite, fast)
+    }
+
+    /// Puts any non-finite particle of an incoming frame back at rest. Returns how many.
+    fn sanitize(&self, frame: &mut CoarseFrame) -> u32 {
+        let mut count = 0;
+        let n = self.model.particle_count();
+        frame.positions.resize(n, Vec3::zeros());
+        frame.velocities.resize(n, Vec3::zeros());
+        for i in 0..n {
+            if !is_finite(&frame.positions[i]) || !is_finite(&frame.velocities[i]) {
+                frame.positions[i] = self.model.rest_positions[i];
+                frame.velocities[i] = Vec3::zeros();
+                count += 1;
+            }
+        }
+        count
+    }
+}
+
+/// Velocity after a contact: the inward normal part (relative to the body) is removed and the
+/// tangential part loses up to `mu` times that much (Coulomb friction).
+pub fn contact_velocity(v: Vec3, normal: Vec3, body_velocity: Vec3, mu: Real) -> Vec3 {
+    let vr = v - body_velocity;
+    let vn = vr.dot(&normal);
+    if vn >= 0.0 {
+        return v;
+    }
+    let vt = vr - normal * vn;
+    let vt_len = vt.norm();
+    let scale = if vt_len > 0.0 { (1.0 - mu * (-vn) / vt_len).max(0.0) } else { 0.0 };
+    body_velocity + vt * scale
+}
+
+impl ClothSolver for ClothSim {
+    fn step_frame(&mut self, frame: &mut CoarseFrame, dt: Real, collider: &mut dyn Collider) -> StepReport {
+        let mut report = StepReport::default();
+        let bad_input = self.sanitize(frame);
+        report.rollbacks += bad_input;
+        report.non_finite_events += bad_input;
+        if !(dt.is_finite() && dt > 0.0) {
+            return report;
+        }
+        let n_sub = (dt / self.stable_substep).ceil().max(1.0);
+        let h_base = dt / n_sub;
+        let (mut t, mut h, mut level, mut good) = (0.0, h_base, 0u32, 0u32);
+        report.min_substep = h_base;
+        let end = dt * (1.0 - 1e-12);
+        while t < end {
+            let h_try = h.min(dt - t);
+            self.backup_x.copy_from_slice(&frame.positions);
+            self.backup_v.copy_from_slice(&frame.velocities);
+            let last = t + h_try >= end;
+            let (nonfinite, fast) = self.substep(frame, frame.time + t, h_try, last, collider);
+            report.non_finite_events += nonfinite;
+            if nonfinite + fast == 0 || level >= self.params.max_halvings {
+                if nonfinite + fast > 0 {
+                    report.rollbacks += self.roll_back(frame);
+                }
+                t += h_try;
+                report.substeps += 1;
+                report.min_substep = report.min_substep.min(h_try);
+                if level > 0 {
+                    good += 1;
+                    if good >= 4 {
+                        h = (h * 2.0).min(h_base);
+                        level -= 1;
+                        good = 0;
+                    }
+                }
+            } else {
+                frame.positions.copy_from_slice(&self.backup_x);
+                frame.velocities.copy_from_slice(&self.backup_v);
+                report.retries += 1;
+                h = h_try * 0.5;
+                level += 1;
+                good = 0;
+            }
+        }
+        frame.time += dt;
+        frame.elastic_force.clone_from(&self.elastic);
+        frame.contacts.clone_from(&self.contacts);
+        report.contacts = frame.contacts.len() as u32;
+        report
+    }
+}
+
+impl ClothSim {
+    /// Restores every non-finite or too-fast particle to its state before the substep, at rest.
+    fn roll_back(&self, frame: &mut CoarseFrame) -> u32 {
+        let max2 = self.params.max_speed * self.params.max_speed;
+        let mut count = 0;
+        for i in 0..frame.positions.len() {
+            let (x, v) = (&frame.positions[i], &frame.velocities[i]);
+            if !is_finite(x) || !is_finite(v) || v.norm_squared() > max2 {
+                frame.positions[i] = self.backup_x[i];
+                frame.velocities[i] = Vec3::zeros();
+                count += 1;
+            }
+        }
+        count
+    }
+}
