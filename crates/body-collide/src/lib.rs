@@ -1,1 +1,22 @@
-//! placeholder
+//! body-collide: the body as a collision object (P1 sections 3.3-3.4).
+//!
+//! - [`NearestVertexCollider`]: P1's collider. Each point keeps its nearest body vertex, updated by a
+//!   local hill-climb from last step's vertex over the body's vertex graph; a point is inside when it is
+//!   behind every face incident to that vertex, and is then moved onto the nearest of those faces.
+//! - [`ExactCollider`]: closest point on the whole triangle mesh (parry3d-f64, with pseudo-normal
+//!   inside tests): the referee that measures every other collider.
+//! - [`BodyFollower`]: P1.3.4, points keep their coordinates relative to their nearest body face when
+//!   the body moves.
+
+pub mod body;
+pub mod exact;
+pub mod follow;
+pub mod tracker;
+
+pub use body::{BodyError, BodyMesh};
+pub use exact::{ExactCollider, penetration_depths};
+pub use follow::{BodyFollower, FollowParams};
+pub use tracker::NearestVertexCollider;
+
+#[cfg(test)]
+mod tests;

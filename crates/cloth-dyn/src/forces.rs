@@ -28,7 +28,11 @@ fn spring_forces<const DAMP: bool, const RECORD: bool>(
         let len = len2.sqrt();
         let rest = s.rest[k];
         let stretch = len - rest;
-        let kk = if stretch > 0.0 { s.k_stretch[k] } else { s.k_compress[k] };
+        let kk = if stretch > 0.0 {
+            s.k_stretch[k]
+        } else {
+            s.k_compress[k]
+        };
         let fe = d * (kk * stretch / rest);
         let mut f = fe;
         if DAMP && len2 > 1e-24 {
@@ -66,7 +70,13 @@ pub fn accelerations(
 }
 
 /// Adds gravity, air drag and velocity damping, then divides by mass (0 for pinned and handled particles).
-fn external_and_accelerate(model: &ClothModel, params: &ClothParams, v: &[Vec3], force: &[Vec3], a: &mut [Vec3]) {
+fn external_and_accelerate(
+    model: &ClothModel,
+    params: &ClothParams,
+    v: &[Vec3],
+    force: &[Vec3],
+    a: &mut [Vec3],
+) {
     let g = params.gravity;
     let (drag, wind, vd) = (params.air_drag, params.wind, params.velocity_damping);
     for i in 0..a.len() {
@@ -111,7 +121,11 @@ mod tests {
 
     #[test]
     fn stretched_spring_pulls_ends_together_asymmetrically() {
-        let p = ClothParams { k_stretch: 100.0, k_compress: 1.0, ..ClothParams::conservative() };
+        let p = ClothParams {
+            k_stretch: 100.0,
+            k_compress: 1.0,
+            ..ClothParams::conservative()
+        };
         let mut m = model(&p);
         // Keep only the first structural spring to look at it alone.
         m.springs.i.truncate(1);
@@ -119,7 +133,11 @@ mod tests {
         let (i, j) = (m.springs.i[0] as usize, m.springs.j[0] as usize);
         let rest = m.springs.rest[0];
         let n = m.particle_count();
-        let (mut f, mut e, mut a) = (vec![Vec3::zeros(); n], vec![Vec3::zeros(); n], vec![Vec3::zeros(); n]);
+        let (mut f, mut e, mut a) = (
+            vec![Vec3::zeros(); n],
+            vec![Vec3::zeros(); n],
+            vec![Vec3::zeros(); n],
+        );
         let v = vec![Vec3::zeros(); n];
         for (scale, k) in [(1.1, 100.0), (0.9, 1.0)] {
             let mut x = m.rest_positions.clone();
@@ -127,7 +145,11 @@ mod tests {
             accelerations(&m, &p, &x, &v, &mut f, Some(&mut e), &mut a);
             let d = x[j] - x[i];
             let expected = d * (k * (d.norm() - rest) / rest);
-            assert!((e[i] - expected).norm() < 1e-12, "force on i: {:?} vs {expected:?}", e[i]);
+            assert!(
+                (e[i] - expected).norm() < 1e-12,
+                "force on i: {:?} vs {expected:?}",
+                e[i]
+            );
             assert!((e[i] + e[j]).norm() < 1e-15);
             // Stretched: i is pulled toward j; compressed: pushed away.
             assert_eq!(e[i].dot(&d) > 0.0, scale > 1.0);
@@ -151,7 +173,11 @@ mod tests {
         accelerations(&m, &p, &x, &v, &mut f, None, &mut a);
         for i in 0..n {
             let drag = Vec3::new(2.0 * m.area[i] / m.mass[i], 0.0, 0.0);
-            assert!((a[i] - (p.gravity + drag)).norm() < 1e-9, "particle {i}: {:?}", a[i]);
+            assert!(
+                (a[i] - (p.gravity + drag)).norm() < 1e-9,
+                "particle {i}: {:?}",
+                a[i]
+            );
         }
     }
 }

@@ -81,7 +81,13 @@ impl Integrator for Rk4 {
     }
     fn step(&mut self, f: &mut dyn Derivative, x: &mut [Vec3], v: &mut [Vec3], h: Real) {
         let n = x.len();
-        for b in [&mut self.xs, &mut self.vs, &mut self.a, &mut self.dx, &mut self.dv] {
+        for b in [
+            &mut self.xs,
+            &mut self.vs,
+            &mut self.a,
+            &mut self.dx,
+            &mut self.dv,
+        ] {
             resize(b, n);
         }
         // Stage 1 at (x, v).
@@ -170,9 +176,16 @@ mod tests {
     fn convergence_orders() {
         let (h1, h2) = (0.02, 0.01);
         let rk = error_at(IntegratorKind::Rk4, h1) / error_at(IntegratorKind::Rk4, h2);
-        let se = error_at(IntegratorKind::SymplecticEuler, h1) / error_at(IntegratorKind::SymplecticEuler, h2);
-        assert!((13.0..19.0).contains(&rk), "RK4 error ratio {rk}, expected about 16");
-        assert!((1.6..2.5).contains(&se), "symplectic Euler error ratio {se}, expected about 2");
+        let se = error_at(IntegratorKind::SymplecticEuler, h1)
+            / error_at(IntegratorKind::SymplecticEuler, h2);
+        assert!(
+            (13.0..19.0).contains(&rk),
+            "RK4 error ratio {rk}, expected about 16"
+        );
+        assert!(
+            (1.6..2.5).contains(&se),
+            "symplectic Euler error ratio {se}, expected about 2"
+        );
     }
 
     #[test]

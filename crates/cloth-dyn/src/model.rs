@@ -131,21 +131,33 @@ pub struct ClothModel {
 
 impl ClothModel {
     /// Builds springs and masses from `mesh` at its current shape (which is the rest shape).
-    pub fn build(mesh: &PolyMesh, params: &ClothParams, handles: Vec<Handle>) -> Result<Self, BuildClothError> {
+    pub fn build(
+        mesh: &PolyMesh,
+        params: &ClothParams,
+        handles: Vec<Handle>,
+    ) -> Result<Self, BuildClothError> {
         params.validate()?;
         let topology = Topology::build(mesh)?;
         let n = mesh.positions.len();
         for h in &handles {
             if h.particle as usize >= n {
-                return Err(BuildClothError::HandleOutOfRange { particle: h.particle, count: n });
+                return Err(BuildClothError::HandleOutOfRange {
+                    particle: h.particle,
+                    count: n,
+                });
             }
             if h.path.is_empty() {
-                return Err(BuildClothError::EmptyHandlePath { particle: h.particle });
+                return Err(BuildClothError::EmptyHandlePath {
+                    particle: h.particle,
+                });
             }
             for (k, (t, p)) in h.path.iter().enumerate() {
                 let backwards = k > 0 && *t < h.path[k - 1].0;
                 if !t.is_finite() || !tryon_core::math::is_finite(p) || backwards {
-                    return Err(BuildClothError::BadHandleKey { particle: h.particle, key: k });
+                    return Err(BuildClothError::BadHandleKey {
+                        particle: h.particle,
+                        key: k,
+                    });
                 }
             }
         }
@@ -182,7 +194,10 @@ impl ClothModel {
             }
         }
         let mass: Vec<Real> = area.iter().map(|a| a * params.density).collect();
-        let mut inv_mass: Vec<Real> = mass.iter().map(|m| if *m > 0.0 { 1.0 / m } else { 0.0 }).collect();
+        let mut inv_mass: Vec<Real> = mass
+            .iter()
+            .map(|m| if *m > 0.0 { 1.0 / m } else { 0.0 })
+            .collect();
         for h in &handles {
             inv_mass[h.particle as usize] = 0.0;
         }
@@ -243,7 +258,11 @@ fn neighbour_in_face(face: &[u32], v: u32, other: u32) -> Option<u32> {
     let k = face.iter().position(|&x| x == v)?;
     let n = face.len();
     let (prev, next) = (face[(k + n - 1) % n], face[(k + 1) % n]);
-    if prev == other { Some(next) } else { Some(prev) }
+    if prev == other {
+        Some(next)
+    } else {
+        Some(prev)
+    }
 }
 
 #[cfg(test)]
@@ -262,14 +281,20 @@ mod tests {
         assert_eq!(model.bend.len(), 2 * (n + 1) * (n - 1));
         let h = 1.0 / n as Real;
         for s in model.bend.clone() {
-            assert!((model.springs.rest[s] - 2.0 * h).abs() < 1e-12, "bend spring {s} not 2h");
+            assert!(
+                (model.springs.rest[s] - 2.0 * h).abs() < 1e-12,
+                "bend spring {s} not 2h"
+            );
         }
         assert!((model.total_mass() - 0.2).abs() < 1e-12);
     }
 
     #[test]
     fn handle_path_interpolates() {
-        let h = Handle { particle: 0, path: vec![(0.0, Vec3::zeros()), (1.0, Vec3::new(2.0, 0.0, 0.0))] };
+        let h = Handle {
+            particle: 0,
+            path: vec![(0.0, Vec3::zeros()), (1.0, Vec3::new(2.0, 0.0, 0.0))],
+        };
         assert_eq!(h.position(0.5), Vec3::new(1.0, 0.0, 0.0));
         assert_eq!(h.position(3.0), Vec3::new(2.0, 0.0, 0.0));
         assert_eq!(h.velocity(0.5), Vec3::new(2.0, 0.0, 0.0));
@@ -280,14 +305,36 @@ mod tests {
     fn bad_handles_are_named() {
         let m = grid_xz(2, 2, 1.0, 1.0, 0.0);
         let p = ClothParams::default();
-        let e = ClothModel::build(&m, &p, vec![Handle { particle: 99, path: vec![(0.0, Vec3::zeros())] }]);
-        assert_eq!(e.unwrap_err(), BuildClothError::HandleOutOfRange { particle: 99, count: 9 });
-        let bad = vec![Handle { particle: 1, path: vec![(1.0, Vec3::zeros()), (0.5, Vec3::zeros())] }];
+        let e = ClothModel::build(
+            &m,
+            &p,
+            vec![Handle {
+                particle: 99,
+                path: vec![(0.0, Vec3::zeros())],
+            }],
+        );
+        assert_eq!(
+            e.unwrap_err(),
+            BuildClothError::HandleOutOfRange {
+                particle: 99,
+                count: 9
+            }
+        );
+        let bad = vec![Handle {
+            particle: 1,
+            path: vec![(1.0, Vec3::zeros()), (0.5, Vec3::zeros())],
+        }];
         assert_eq!(
             ClothModel::build(&m, &p, bad).unwrap_err(),
-            BuildClothError::BadHandleKey { particle: 1, key: 1 }
+            BuildClothError::BadHandleKey {
+                particle: 1,
+                key: 1
+            }
         );
-        let p = ClothParams { density: -1.0, ..ClothParams::default() };
+        let p = ClothParams {
+            density: -1.0,
+            ..ClothParams::default()
+        };
         let msg = ClothModel::build(&m, &p, vec![]).unwrap_err().to_string();
         assert!(msg.contains("density") && msg.contains("-1"), "{msg}");
     }

@@ -102,24 +102,44 @@ impl ClothParams {
         ];
         for (name, value) in nonneg {
             if !(value.is_finite() && value >= 0.0) {
-                return Err(ParamError { name, value: value.to_string(), expected: "a finite number >= 0" });
+                return Err(ParamError {
+                    name,
+                    value: value.to_string(),
+                    expected: "a finite number >= 0",
+                });
             }
         }
-        let positive = [("density", self.density), ("max_substep", self.max_substep), ("max_speed", self.max_speed)];
+        let positive = [
+            ("density", self.density),
+            ("max_substep", self.max_substep),
+            ("max_speed", self.max_speed),
+        ];
         for (name, value) in positive {
             if !(value.is_finite() && value > 0.0) {
-                return Err(ParamError { name, value: value.to_string(), expected: "a finite number > 0" });
+                return Err(ParamError {
+                    name,
+                    value: value.to_string(),
+                    expected: "a finite number > 0",
+                });
             }
         }
         for (name, v) in [("gravity", self.gravity), ("wind", self.wind)] {
             if !tryon_core::math::is_finite(&v) {
-                return Err(ParamError { name, value: format!("{v:?}"), expected: "a finite vector" });
+                return Err(ParamError {
+                    name,
+                    value: format!("{v:?}"),
+                    expected: "a finite vector",
+                });
             }
         }
         if let Some(s) = self.max_strain
             && !(s.is_finite() && s >= 1.0)
         {
-            return Err(ParamError { name: "max_strain", value: s.to_string(), expected: "a ratio >= 1" });
+            return Err(ParamError {
+                name: "max_strain",
+                value: s.to_string(),
+                expected: "a ratio >= 1",
+            });
         }
         if self.max_halvings > 40 {
             return Err(ParamError {

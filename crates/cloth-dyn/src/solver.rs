@@ -49,7 +49,11 @@ struct Rhs<'a> {
 
 impl Derivative for Rhs<'_> {
     fn accelerations(&mut self, x: &[Vec3], v: &[Vec3], a: &mut [Vec3], first: bool) {
-        let elastic = if first && self.record { Some(self.elastic.as_mut_slice()) } else { None };
+        let elastic = if first && self.record {
+            Some(self.elastic.as_mut_slice())
+        } else {
+            None
+        };
         accelerations(self.model, self.params, x, v, self.force, elastic, a);
     }
 }
@@ -61,11 +65,19 @@ impl ClothSim {
     }
 
     /// A simulation of `model` with any integrator.
-    pub fn with_integrator(model: ClothModel, params: ClothParams, integrator: Box<dyn Integrator>) -> Self {
+    pub fn with_integrator(
+        model: ClothModel,
+        params: ClothParams,
+        integrator: Box<dyn Integrator>,
+    ) -> Self {
         let n = model.particle_count();
         let (omega, damp) = stiffness_bounds(&model);
         let bound = 0.9 * integrator.stability_limit() / (omega + damp).max(1e-12);
-        let stable_substep = if params.auto_substep { params.max_substep.min(bound) } else { params.max_substep };
+        let stable_substep = if params.auto_substep {
+            params.max_substep.min(bound)
+        } else {
+            params.max_substep
+        };
         let z = vec![Vec3::zeros(); n];
         ClothSim {
             model,
@@ -101,7 +113,14 @@ impl ClothSim {
     }
 
     /// One substep from absolute time `t`. Returns (non-finite particles, exploding particles).
-    fn substep(&mut self, frame: &mut CoarseFrame, t: Real, h: Real, record: bool, collider: &mut dyn Collider) -> (u32, u32) {
+    fn substep(
+        &mut self,
+        frame: &mut CoarseFrame,
+        t: Real,
+        h: Real,
+        record: bool,
+        collider: &mut dyn Collider,
+    ) -> (u32, u32) {
         let (x, v) = (&mut frame.positions, &mut frame.velocities);
         for hd in &self.model.handles {
             x[hd.particle as usize] = hd.position(t);
@@ -178,12 +197,21 @@ pub fn contact_velocity(v: Vec3, normal: Vec3, body_velocity: Vec3, mu: Real) ->
     }
     let vt = vr - normal * vn;
     let vt_len = vt.norm();
-    let scale = if vt_len > 0.0 { (1.0 - mu * (-vn) / vt_len).max(0.0) } else { 0.0 };
+    let scale = if vt_len > 0.0 {
+        (1.0 - mu * (-vn) / vt_len).max(0.0)
+    } else {
+        0.0
+    };
     body_velocity + vt * scale
 }
 
 impl ClothSolver for ClothSim {
-    fn step_frame(&mut self, frame: &mut CoarseFrame, dt: Real, collider: &mut dyn Collider) -> StepReport {
+    fn step_frame(
+        &mut self,
+        frame: &mut CoarseFrame,
+        dt: Real,
+        collider: &mut dyn Collider,
+    ) -> StepReport {
         let mut report = StepReport::default();
         let bad_input = self.sanitize(frame);
         report.rollbacks += bad_input;

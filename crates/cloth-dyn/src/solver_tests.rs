@@ -14,11 +14,18 @@ fn sim(n: usize, params: ClothParams, kind: IntegratorKind, handles: Vec<Handle>
 }
 
 fn momentum(sim: &ClothSim, f: &CoarseFrame) -> Vec3 {
-    f.velocities.iter().zip(&sim.model.mass).map(|(v, m)| v * *m).sum()
+    f.velocities
+        .iter()
+        .zip(&sim.model.mass)
+        .map(|(v, m)| v * *m)
+        .sum()
 }
 
 fn kind_strategy() -> impl Strategy<Value = IntegratorKind> {
-    prop_oneof![Just(IntegratorKind::Rk4), Just(IntegratorKind::SymplecticEuler)]
+    prop_oneof![
+        Just(IntegratorKind::Rk4),
+        Just(IntegratorKind::SymplecticEuler)
+    ]
 }
 
 proptest! {
@@ -70,7 +77,10 @@ fn stiff_cloth_at_a_large_step_stays_finite_and_reports_retries() {
         max_strain: None,
         ..ClothParams::default()
     };
-    let pin = vec![Handle { particle: 0, path: vec![(0.0, Vec3::new(-0.5, 0.5, -0.5))] }];
+    let pin = vec![Handle {
+        particle: 0,
+        path: vec![(0.0, Vec3::new(-0.5, 0.5, -0.5))],
+    }];
     let mut s = sim(6, params, IntegratorKind::Rk4, pin);
     let mut f = s.initial_frame();
     let mut retries = 0;
@@ -79,14 +89,24 @@ fn stiff_cloth_at_a_large_step_stays_finite_and_reports_retries() {
         retries += r.retries;
         assert!(f.positions.iter().chain(&f.velocities).all(is_finite));
     }
-    assert!(retries > 0, "a 1e6 N/m cloth at dt = 1/30 s must need retries");
+    assert!(
+        retries > 0,
+        "a 1e6 N/m cloth at dt = 1/30 s must need retries"
+    );
     // The same cloth with the stability bound needs none.
-    let params = ClothParams { auto_substep: true, ..s.params.clone() };
+    let params = ClothParams {
+        auto_substep: true,
+        ..s.params.clone()
+    };
     let mut s = sim(6, params, IntegratorKind::Rk4, vec![]);
     let mut f = s.initial_frame();
     let r = s.step_frame(&mut f, 1.0 / 30.0, &mut NoCollider);
     assert_eq!(r.retries, 0);
-    assert!(r.substeps > 100, "stable substep should be tiny, got {} substeps", r.substeps);
+    assert!(
+        r.substeps > 100,
+        "stable substep should be tiny, got {} substeps",
+        r.substeps
+    );
 }
 
 #[test]
@@ -107,9 +127,15 @@ fn non_finite_input_is_rolled_back_and_reported() {
 
 #[test]
 fn handle_drags_its_particle_and_the_cloth_follows() {
-    let path = vec![(0.0, Vec3::new(-0.5, 0.5, -0.5)), (1.0, Vec3::new(-0.5, 1.5, -0.5))];
+    let path = vec![
+        (0.0, Vec3::new(-0.5, 0.5, -0.5)),
+        (1.0, Vec3::new(-0.5, 1.5, -0.5)),
+    ];
     let handle = Handle { particle: 0, path };
-    let params = ClothParams { gravity: Vec3::zeros(), ..ClothParams::default() };
+    let params = ClothParams {
+        gravity: Vec3::zeros(),
+        ..ClothParams::default()
+    };
     let mut s = sim(4, params, IntegratorKind::Rk4, vec![handle.clone()]);
     let mut f = s.initial_frame();
     for k in 1..=60 {
@@ -120,9 +146,15 @@ fn handle_drags_its_particle_and_the_cloth_follows() {
     // Weightless and free to bend, the sheet is dragged along: the strain limit keeps every particle
     // within 1.02 x its rest distance of the handle (sqrt 2 for the far corner) and lifts its centre.
     let reach = (f.positions[24] - f.positions[0]).norm();
-    assert!(reach <= 1.02 * (2.0 as Real).sqrt() + 1e-9, "far corner {reach} m from the handle");
+    assert!(
+        reach <= 1.02 * (2.0 as Real).sqrt() + 1e-9,
+        "far corner {reach} m from the handle"
+    );
     let mean_y = f.positions.iter().map(|p| p.y).sum::<Real>() / 25.0;
-    assert!(mean_y > 0.7, "centre of the cloth at y = {mean_y}, should have risen from 0.5");
+    assert!(
+        mean_y > 0.7,
+        "centre of the cloth at y = {mean_y}, should have risen from 0.5"
+    );
 }
 
 #[test]

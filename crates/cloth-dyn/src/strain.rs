@@ -53,8 +53,17 @@ mod tests {
 
     #[test]
     fn stretched_grid_is_pulled_back_with_momentum_kept() {
-        let m = ClothModel::build(&grid_xz(4, 4, 1.0, 1.0, 0.0), &ClothParams::default(), vec![]).unwrap();
-        let mut x: Vec<Vec3> = m.rest_positions.iter().map(|p| p.component_mul(&Vec3::new(1.5, 1.0, 1.0))).collect();
+        let m = ClothModel::build(
+            &grid_xz(4, 4, 1.0, 1.0, 0.0),
+            &ClothParams::default(),
+            vec![],
+        )
+        .unwrap();
+        let mut x: Vec<Vec3> = m
+            .rest_positions
+            .iter()
+            .map(|p| p.component_mul(&Vec3::new(1.5, 1.0, 1.0)))
+            .collect();
         let before: Vec3 = x.iter().zip(&m.mass).map(|(p, m)| p * *m).sum();
         limit_strain(&m, 1.05, 50, &mut x);
         let after: Vec3 = x.iter().zip(&m.mass).map(|(p, m)| p * *m).sum();

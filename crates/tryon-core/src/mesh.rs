@@ -38,15 +38,27 @@ pub enum MeshError {
     #[error("vertex {vertex} has a non-finite coordinate {value:?}")]
     NonFiniteCoordinate { vertex: usize, value: [Real; 3] },
     #[error("face {face} refers to vertex {index}, but the mesh has only {vertex_count} vertices")]
-    IndexOutOfRange { face: usize, index: u32, vertex_count: usize },
+    IndexOutOfRange {
+        face: usize,
+        index: u32,
+        vertex_count: usize,
+    },
     #[error("face {face} lists vertex {vertex} more than once")]
     RepeatedVertex { face: usize, vertex: u32 },
     #[error("face {face} has a zero-length edge between vertices {a} and {b}")]
     ZeroLengthEdge { face: usize, a: u32, b: u32 },
     #[error("face {face} is degenerate: area {area:e} (at most {tolerance:e} is rejected)")]
-    DegenerateFace { face: usize, area: Real, tolerance: Real },
+    DegenerateFace {
+        face: usize,
+        area: Real,
+        tolerance: Real,
+    },
     #[error("vertices {a} and {b} are duplicates: both at {position:?}")]
-    DuplicateVertex { a: usize, b: usize, position: [Real; 3] },
+    DuplicateVertex {
+        a: usize,
+        b: usize,
+        position: [Real; 3],
+    },
 }
 
 impl PolyMesh {
@@ -112,7 +124,11 @@ impl PolyMesh {
             lo = lo.inf(p);
             hi = hi.sup(p);
         }
-        if self.positions.is_empty() { 0.0 } else { (hi - lo).norm() }
+        if self.positions.is_empty() {
+            0.0
+        } else {
+            (hi - lo).norm()
+        }
     }
 
     /// Checks indices, finiteness, repeated corners, zero-length edges, degenerate faces and duplicate
@@ -123,7 +139,10 @@ impl PolyMesh {
         }
         for (i, p) in self.positions.iter().enumerate() {
             if !is_finite(p) {
-                return Err(MeshError::NonFiniteCoordinate { vertex: i, value: [p.x, p.y, p.z] });
+                return Err(MeshError::NonFiniteCoordinate {
+                    vertex: i,
+                    value: [p.x, p.y, p.z],
+                });
             }
         }
         let n = self.positions.len();
@@ -132,10 +151,17 @@ impl PolyMesh {
             let vs = f.vertices();
             for (k, &v) in vs.iter().enumerate() {
                 if v as usize >= n {
-                    return Err(MeshError::IndexOutOfRange { face: fi, index: v, vertex_count: n });
+                    return Err(MeshError::IndexOutOfRange {
+                        face: fi,
+                        index: v,
+                        vertex_count: n,
+                    });
                 }
                 if vs[..k].contains(&v) {
-                    return Err(MeshError::RepeatedVertex { face: fi, vertex: v });
+                    return Err(MeshError::RepeatedVertex {
+                        face: fi,
+                        vertex: v,
+                    });
                 }
             }
             for k in 0..vs.len() {
@@ -146,7 +172,11 @@ impl PolyMesh {
             }
             let area = self.face_area(fi);
             if area <= eps * eps {
-                return Err(MeshError::DegenerateFace { face: fi, area, tolerance: eps * eps });
+                return Err(MeshError::DegenerateFace {
+                    face: fi,
+                    area,
+                    tolerance: eps * eps,
+                });
             }
         }
         self.check_duplicates(eps)
@@ -163,7 +193,11 @@ impl PolyMesh {
                 }
                 if (p[a] - p[b]).norm() <= eps {
                     let (a, b) = (a.min(b), a.max(b));
-                    return Err(MeshError::DuplicateVertex { a, b, position: [p[a].x, p[a].y, p[a].z] });
+                    return Err(MeshError::DuplicateVertex {
+                        a,
+                        b,
+                        position: [p[a].x, p[a].y, p[a].z],
+                    });
                 }
             }
         }
@@ -221,29 +255,48 @@ mod tests {
     fn rejects_named_faults() {
         let mut m = quad();
         m.positions[2].y = Real::NAN;
-        assert!(matches!(m.validate(), Err(MeshError::NonFiniteCoordinate { vertex: 2, .. })));
+        assert!(matches!(
+            m.validate(),
+            Err(MeshError::NonFiniteCoordinate { vertex: 2, .. })
+        ));
         let mut m = quad();
         m.faces.push(Face::Tri([0, 1, 9]));
         assert_eq!(
             m.validate(),
-            Err(MeshError::IndexOutOfRange { face: 1, index: 9, vertex_count: 4 })
+            Err(MeshError::IndexOutOfRange {
+                face: 1,
+                index: 9,
+                vertex_count: 4
+            })
         );
         let mut m = quad();
         m.faces.push(Face::Tri([0, 1, 0]));
-        assert_eq!(m.validate(), Err(MeshError::RepeatedVertex { face: 1, vertex: 0 }));
+        assert_eq!(
+            m.validate(),
+            Err(MeshError::RepeatedVertex { face: 1, vertex: 0 })
+        );
         let mut m = quad();
         m.positions.push(m.positions[1] + Vec3::new(0.5, 0.0, 0.0));
         m.faces.push(Face::Tri([1, 4, 3]));
         m.positions[3] = m.positions[1];
-        assert!(matches!(m.validate(), Err(MeshError::ZeroLengthEdge { face: 0, .. })));
+        assert!(matches!(
+            m.validate(),
+            Err(MeshError::ZeroLengthEdge { face: 0, .. })
+        ));
         let mut m = quad();
         m.positions.push(Vec3::new(1.5, 0.0, -0.5));
         m.positions.push(Vec3::new(2.5, 0.0, -0.5));
         m.faces.push(Face::Tri([0, 4, 5]));
-        assert!(matches!(m.validate(), Err(MeshError::DegenerateFace { face: 1, .. })));
+        assert!(matches!(
+            m.validate(),
+            Err(MeshError::DegenerateFace { face: 1, .. })
+        ));
         let mut m = quad();
         m.positions.push(m.positions[2]);
-        assert!(matches!(m.validate(), Err(MeshError::DuplicateVertex { a: 2, b: 4, .. })));
+        assert!(matches!(
+            m.validate(),
+            Err(MeshError::DuplicateVertex { a: 2, b: 4, .. })
+        ));
         let msg = m.validate().unwrap_err().to_string();
         assert!(msg.contains("vertices 2 and 4"), "{msg}");
     }

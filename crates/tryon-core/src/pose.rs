@@ -23,6 +23,10 @@ pub struct Pose {
 impl Pose {
     /// The rest pose of a skeleton with `joints` joints.
     pub fn rest(joints: usize) -> Self {
-        Pose { time: 0.0, root_translation: Vec3::zeros(), local_rotations: vec![UnitQuat::identity(); joints] }
+        Pose {
+            time: 0.0,
+            root_translation: Vec3::zeros(),
+            local_rotations: vec![UnitQuat::identity(); joints],
+        }
     }
 }

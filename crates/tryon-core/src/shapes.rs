@@ -9,18 +9,43 @@ use std::collections::HashMap;
 pub fn icosphere(radius: Real, subdivisions: u32, center: Vec3) -> PolyMesh {
     let t = (1.0 + (5.0 as Real).sqrt()) / 2.0;
     let mut pos: Vec<Vec3> = [
-        (-1.0, t, 0.0), (1.0, t, 0.0), (-1.0, -t, 0.0), (1.0, -t, 0.0),
-        (0.0, -1.0, t), (0.0, 1.0, t), (0.0, -1.0, -t), (0.0, 1.0, -t),
-        (t, 0.0, -1.0), (t, 0.0, 1.0), (-t, 0.0, -1.0), (-t, 0.0, 1.0),
+        (-1.0, t, 0.0),
+        (1.0, t, 0.0),
+        (-1.0, -t, 0.0),
+        (1.0, -t, 0.0),
+        (0.0, -1.0, t),
+        (0.0, 1.0, t),
+        (0.0, -1.0, -t),
+        (0.0, 1.0, -t),
+        (t, 0.0, -1.0),
+        (t, 0.0, 1.0),
+        (-t, 0.0, -1.0),
+        (-t, 0.0, 1.0),
     ]
     .iter()
     .map(|&(x, y, z)| Vec3::new(x, y, z).normalize())
     .collect();
     let mut tris: Vec<[u32; 3]> = vec![
-        [0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11],
-        [1, 5, 9], [5, 11, 4], [11, 10, 2], [10, 7, 6], [7, 1, 8],
-        [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8], [3, 8, 9],
-        [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1],
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
     ];
     for _ in 0..subdivisions {
         let mut mid: HashMap<(u32, u32), u32> = HashMap::new();
@@ -67,10 +92,17 @@ mod tests {
         let (tris, _) = m.triangulate();
         let mut volume = 0.0;
         for [a, b, c] in tris {
-            let (a, b, c) = (m.positions[a as usize], m.positions[b as usize], m.positions[c as usize]);
+            let (a, b, c) = (
+                m.positions[a as usize],
+                m.positions[b as usize],
+                m.positions[c as usize],
+            );
             volume += a.dot(&b.cross(&c)) / 6.0;
         }
         let exact = 4.0 / 3.0 * std::f64::consts::PI * 0.027;
-        assert!(volume > 0.95 * exact && volume < exact, "volume {volume} vs sphere {exact}");
+        assert!(
+            volume > 0.95 * exact && volume < exact,
+            "volume {volume} vs sphere {exact}"
+        );
     }
 }

@@ -40,7 +40,12 @@ pub trait Collider {
 pub trait ClothSolver {
     /// Advances `frame` by `dt`, resolving collisions with `collider`. Never fails: non-finite or
     /// exploding state is retried smaller or rolled back, and reported.
-    fn step_frame(&mut self, frame: &mut CoarseFrame, dt: Real, collider: &mut dyn Collider) -> StepReport;
+    fn step_frame(
+        &mut self,
+        frame: &mut CoarseFrame,
+        dt: Real,
+        collider: &mut dyn Collider,
+    ) -> StepReport;
 }
 
 /// Coarse surface -> fine surface. Topology is built once at construction.
@@ -113,9 +118,18 @@ impl Collider for NoCollider {
 pub struct FrozenCloth;
 
 impl ClothSolver for FrozenCloth {
-    fn step_frame(&mut self, frame: &mut CoarseFrame, dt: Real, _collider: &mut dyn Collider) -> StepReport {
+    fn step_frame(
+        &mut self,
+        frame: &mut CoarseFrame,
+        dt: Real,
+        _collider: &mut dyn Collider,
+    ) -> StepReport {
         frame.time += dt;
-        StepReport { substeps: 1, min_substep: dt, ..StepReport::default() }
+        StepReport {
+            substeps: 1,
+            min_substep: dt,
+            ..StepReport::default()
+        }
     }
 }
 
@@ -126,7 +140,12 @@ pub struct FlatRefiner {
 }
 
 impl Refiner for FlatRefiner {
-    fn refine(&mut self, coarse_positions: &[Vec3], coarse_normals: &[Vec3], out: &mut FineSurface) {
+    fn refine(
+        &mut self,
+        coarse_positions: &[Vec3],
+        coarse_normals: &[Vec3],
+        out: &mut FineSurface,
+    ) {
         out.positions.clear();
         out.positions.extend_from_slice(coarse_positions);
         out.normals.clear();
@@ -138,7 +157,11 @@ impl Refiner for FlatRefiner {
                 for (k, &v) in t.iter().enumerate() {
                     let mut bary = [0.0; 3];
                     bary[k] = 1.0;
-                    out.sources[v as usize] = FineVertexSource { face: fi as u32, bary, level: 0 };
+                    out.sources[v as usize] = FineVertexSource {
+                        face: fi as u32,
+                        bary,
+                        level: 0,
+                    };
                 }
             }
         }
@@ -150,7 +173,13 @@ impl Refiner for FlatRefiner {
 pub struct NoDetail;
 
 impl DetailModel for NoDetail {
-    fn apply(&mut self, _coarse: &CoarseFrame, _fine: &mut FineSurface, _collider: &mut dyn Collider) {}
+    fn apply(
+        &mut self,
+        _coarse: &CoarseFrame,
+        _fine: &mut FineSurface,
+        _collider: &mut dyn Collider,
+    ) {
+    }
 }
 
 #[cfg(test)]
@@ -159,12 +188,18 @@ mod tests {
 
     #[test]
     fn trivial_stages_compose() {
-        let motion = StillMotion { joints: 3, duration: 2.0 };
+        let motion = StillMotion {
+            joints: 3,
+            duration: 2.0,
+        };
         let mut pose = Pose::default();
         motion.sample(5.0, &mut pose);
         assert_eq!(pose.time, 2.0);
         assert_eq!(pose.local_rotations.len(), 3);
-        let mut body = StaticBody { positions: vec![Vec3::x(); 3], triangles: vec![[0, 1, 2]] };
+        let mut body = StaticBody {
+            positions: vec![Vec3::x(); 3],
+            triangles: vec![[0, 1, 2]],
+        };
         let mut frame = BodyFrame::default();
         body.pose(&pose, &mut frame);
         assert_eq!(frame.positions.len(), 3);
@@ -178,7 +213,9 @@ mod tests {
         let report = FrozenCloth.step_frame(&mut cloth, 0.5, collider.as_mut());
         assert_eq!(cloth.time, 0.5);
         assert_eq!(report.substeps, 1);
-        let mut refiner = FlatRefiner { triangles: vec![[0, 1, 2]] };
+        let mut refiner = FlatRefiner {
+            triangles: vec![[0, 1, 2]],
+        };
         let mut fine = FineSurface::default();
         refiner.refine(&cloth.positions, &[Vec3::z(); 3], &mut fine);
         assert_eq!(fine.sources[2].bary, [0.0, 0.0, 1.0]);

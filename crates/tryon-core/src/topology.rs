@@ -115,7 +115,11 @@ impl Topology {
                 _ => return Err(TopologyError::NonManifoldEdge { a, b, faces }),
             }
         }
-        for r in ring.iter_mut().chain(vertex_faces.iter_mut()).chain(fadj.iter_mut()) {
+        for r in ring
+            .iter_mut()
+            .chain(vertex_faces.iter_mut())
+            .chain(fadj.iter_mut())
+        {
             r.sort_unstable();
             r.dedup();
         }
@@ -161,6 +165,9 @@ mod tests {
         m.faces.push(Face::Tri([0, 1, 4]));
         m.faces.push(Face::Tri([1, 0, 5]));
         let err = Topology::build(&m).unwrap_err();
-        assert!(matches!(err, TopologyError::NonManifoldEdge { a: 0, b: 1, .. }), "{err}");
+        assert!(
+            matches!(err, TopologyError::NonManifoldEdge { a: 0, b: 1, .. }),
+            "{err}"
+        );
     }
 }

@@ -1,0 +1,155 @@
+//! The body's triangle mesh with the topology the colliders need, and its per-frame shape
+//! (positions, face normals, velocities).
+
+use thiserror::Error;
+use tryon_core::frames::BodyFrame;
+use tryon_core::math::{Real, Vec3, closest_point_on_triangle};
+use tryon_core::mesh::PolyMesh;
+use tryon_core::topology::{Csr, Topology, TopologyError};
+
+/// Why a body mesh was rejected.
+#[derive(Debug, Error, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum BodyError {
+    #[error("body mesh: {0}")]
+    Topology(#[from] TopologyError),
+    #[error("body frame has {got} vertices, the body mesh has {expected}")]
+    VertexCount { got: usize, expected: usize },
+}
+
+/// A body triangle mesh, its topology, and its current shape.
+#[derive(Clone, Debug)]
+pub struct BodyMesh {
+    pub triangles: Vec<[u32; 3]>,
+    /// Neighbouring vertices of each vertex.
+    pub ring: Csr,
+    /// Triangles around each vertex.
+    pub vertex_faces: Csr,
+    pub positions: Vec<Vec3>,
+    /// Unit outward normal of each triangle.
+    pub face_normals: Vec<Vec3>,
+    /// Vertex velocities (empty when the body is at rest).
+    pub velocities: Vec<Vec3>,
+}
+
+impl BodyMesh {
+    /// Validates the mesh (triangulating quads) and builds its topology.
+    pub fn new(mesh: &PolyMesh) -> Result<Self, BodyError> {
+        let (triangles, _) = mesh.triangulate();
+        let tri_mesh = PolyMesh::from_triangles(mesh.positions.clone(), &triangles)
+            .map_err(TopologyError::from)?;
+        let topo = Topology::build(&tri_mesh)?;
+        let mut body = BodyMesh {
+            triangles,
+            ring: topo.vertex_ring,
+            vertex_faces: topo.vertex_faces,
+            positions: mesh.positions.clone(),
+            face_normals: Vec::new(),
+            velocities: Vec::new(),
+        };
+        body.compute_normals();
+        Ok(body)
+    }
+
+    /// Takes a new body shape. Frames with the wrong vertex count are ignored and reported.
+    pub fn set_frame(&mut self, frame: &BodyFrame) -> Result<(), BodyError> {
+        if frame.positions.len() != self.positions.len() {
+            return Err(BodyError::VertexCount {
+                got: frame.positions.len(),
+                expected: self.positions.len(),
+            });
+        }
+        self.positions.copy_from_slice(&frame.positions);
+        self.velocities.clear();
+        if frame.velocities.len() == frame.positions.len() {
+            self.velocities.extend_from_slice(&frame.velocities);
+        }
+        self.compute_normals();
+        Ok(())
+    }
+
+    fn compute_normals(&mut self) {
+        let p = &self.positions;
+        self.face_normals.clear();
+        self.face_normals.extend(self.triangles.iter().map(|t| {
+            let [a, b, c] = t.map(|v| p[v as usize]);
+            let n = (b - a).cross(&(c - a));
+            let len = n.norm();
+            if len > 0.0 { n / len } else { Vec3::zeros() }
+        }));
+    }
+
+    /// Corner positions of triangle `f`.
+    #[inline]
+    pub fn corners(&self, f: usize) -> [Vec3; 3] {
+        self.triangles[f].map(|v| self.positions[v as usize])
+    }
+
+    /// Velocity of the surface at barycentric `bary` on triangle `f` (zero for a body at rest).
+    pub fn velocity_at(&self, f: usize, bary: [Real; 3]) -> Vec3 {
+        if self.velocities.is_empty() {
+            return Vec3::zeros();
+        }
+        let t = self.triangles[f];
+        (0..3)
+            .map(|k| self.velocities[t[k] as usize] * bary[k])
+            .sum()
+    }
+
+    /// Steepest descent on distance to `p` over the vertex graph, from vertex `start`.
+    pub fn climb(&self, p: &Vec3, start: u32) -> u32 {
+        let mut v = start;
+        let mut best = (self.positions[v as usize] - p).norm_squared();
+        loop {
+            let mut next = v;
+            for &w in self.ring.row(v as usize) {
+                let d = (self.positions[w as usize] - p).norm_squared();
+                if d < best {
+                    best = d;
+                    next = w;
+                }
+            }
+            if next == v {
+                return v;
+            }
+            v = next;
+        }
+    }
+
+    /// The nearest vertex to `p` by checking every vertex.
+    pub fn nearest_vertex_brute(&self, p: &Vec3) -> u32 {
+        let mut best = (0, Real::INFINITY);
+        for (i, q) in self.positions.iter().enumerate() {
+            let d = (q - p).norm_squared();
+            if d < best.1 {
+                best = (i as u32, d);
+            }
+        }
+        best.0
+    }
+
+    /// Closest point to `p` on the triangles around vertex `v`: (face, point, barycentric).
+    pub fn closest_on_fan(&self, p: &Vec3, v: u32) -> (u32, Vec3, [Real; 3]) {
+        let mut best = (u32::MAX, Vec3::zeros(), [0.0; 3], Real::INFINITY);
+        for &f in self.vertex_faces.row(v as usize) {
+            let [a, b, c] = self.corners(f as usize);
+            let (q, w) = closest_point_on_triangle(p, &a, &b, &c);
+            let d = (q - p).norm_squared();
+            if d < best.3 {
+                best = (f, q, w, d);
+            }
+        }
+        (best.0, best.1, best.2)
+    }
+
+    /// Axis-aligned bounds of the current shape.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        let mut lo = Vec3::repeat(Real::INFINITY);
+        let mut hi = Vec3::repeat(Real::NEG_INFINITY);
+        for p in &self.positions {
+            lo = lo.inf(p);
+            hi = hi.sup(p);
+        }
+        (lo, hi)
+    }
+}

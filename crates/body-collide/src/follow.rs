@@ -1,0 +1,148 @@
+//! P1 section 3.4, following the body: after a step each point near the body records its
+//! coordinates in the frame of its nearest body face (two edge coordinates and a height along the
+//! unit normal); after the body moves, the point is put back at the same face coordinates. The
+//! decomposition is affine, so a rigid motion of the body moves followed points by exactly that motion.
+
+use crate::body::{BodyError, BodyMesh};
+use tryon_core::frames::BodyFrame;
+use tryon_core::math::{Real, Vec3};
+
+/// How far from the body points follow it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FollowParams {
+    /// Points within this distance of the body follow it fully (m).
+    pub near: Real,
+    /// Following fades linearly to nothing at this distance (m).
+    pub far: Real,
+}
+
+impl Default for FollowParams {
+    fn default() -> Self {
+        FollowParams {
+            near: 0.01,
+            far: 0.03,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Attachment {
+    face: u32,
+    /// p = v0 + a (v1 - v0) + b (v2 - v0) + c n.
+    abc: [Real; 3],
+    weight: Real,
+}
+
+/// Records points relative to the body and puts them back after the body moves.
+#[derive(Clone, Debug)]
+pub struct BodyFollower {
+    pub body: BodyMesh,
+    pub params: FollowParams,
+    nearest: Vec<u32>,
+    attached: Vec<Option<Attachment>>,
+}
+
+fn frame_of(body: &BodyMesh, f: usize) -> (Vec3, Vec3, Vec3, Vec3) {
+    let [v0, v1, v2] = body.corners(f);
+    (v0, v1 - v0, v2 - v0, body.face_normals[f])
+}
+
+impl BodyFollower {
+    /// A follower for a body mesh (given in its current shape).
+    pub fn new(body: BodyMesh, params: FollowParams) -> Self {
+        BodyFollower {
+            body,
+            params,
+            nearest: Vec::new(),
+            attached: Vec::new(),
+        }
+    }
+
+    /// Records each point's face coordinates on the current body (call after a step).
+    pub fn record(&mut self, points: &[Vec3]) {
+        if self.nearest.len() != points.len() {
+            self.nearest = points
+                .iter()
+                .map(|p| self.body.nearest_vertex_brute(p))
+                .collect();
+        }
+        self.attached.clear();
+        for (i, p) in points.iter().enumerate() {
+            let v = self.body.climb(p, self.nearest[i]);
+            self.nearest[i] = v;
+            let (f, q) = self.closest_near(p, v);
+            let dist = (p - q).norm();
+            let weight = if dist <= self.params.near {
+                1.0
+            } else if dist < self.params.far {
+                (self.params.far - dist) / (self.params.far - self.params.near)
+            } else {
+                0.0
+            };
+            self.attached.push(if weight > 0.0 {
+                self.coordinates(p, f as usize).map(|abc| Attachment {
+                    face: f,
+                    abc,
+                    weight,
+                })
+            } else {
+                None
+            });
+        }
+    }
+
+    /// Closest point on the faces around `v` and around its neighbours (the two-ring), which finds
+    /// the right face even where long triangles put the closest point outside the nearest vertex's fan.
+    fn closest_near(&self, p: &Vec3, v: u32) -> (u32, Vec3) {
+        let (mut f, mut q, _) = self.body.closest_on_fan(p, v);
+        let mut best = (q - p).norm_squared();
+        for &w in self.body.ring.row(v as usize) {
+            let (f2, q2, _) = self.body.closest_on_fan(p, w);
+            let d = (q2 - p).norm_squared();
+            if d < best {
+                (f, q, best) = (f2, q2, d);
+            }
+        }
+        (f, q)
+    }
+
+    /// The follow weight of each recorded point (1 = follows fully, 0 = not attached).
+    pub fn weights(&self) -> Vec<Real> {
+        self.attached
+            .iter()
+            .map(|a| a.map_or(0.0, |a| a.weight))
+            .collect()
+    }
+
+    fn coordinates(&self, p: &Vec3, f: usize) -> Option<[Real; 3]> {
+        let (v0, e1, e2, n) = frame_of(&self.body, f);
+        let r = p - v0;
+        let c = r.dot(&n);
+        let r = r - n * c;
+        let (g11, g12, g22) = (e1.dot(&e1), e1.dot(&e2), e2.dot(&e2));
+        let det = g11 * g22 - g12 * g12;
+        if !(det > 0.0) {
+            return None;
+        }
+        let (r1, r2) = (r.dot(&e1), r.dot(&e2));
+        Some([(r1 * g22 - r2 * g12) / det, (r2 * g11 - r1 * g12) / det, c])
+    }
+
+    /// Takes the body's new shape and moves every recorded point to its face coordinates there.
+    /// Returns how many points moved.
+    pub fn apply(&mut self, frame: &BodyFrame, points: &mut [Vec3]) -> Result<usize, BodyError> {
+        self.body.set_frame(frame)?;
+        let mut moved = 0;
+        for (p, a) in points.iter_mut().zip(&self.attached) {
+            let Some(a) = a else { continue };
+            let (v0, e1, e2, n) = frame_of(&self.body, a.face as usize);
+            let [ca, cb, cc] = a.abc;
+            let target = v0 + e1 * ca + e2 * cb + n * cc;
+            if tryon_core::math::is_finite(&target) {
+                *p += (target - *p) * a.weight;
+                moved += 1;
+            }
+        }
+        Ok(moved)
+    }
+}

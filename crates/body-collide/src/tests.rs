@@ -1,0 +1,185 @@
+//! Property tests of the colliders and body following against the exact referee.
+
+use crate::{BodyFollower, BodyMesh, ExactCollider, FollowParams, NearestVertexCollider};
+use proptest::prelude::*;
+use tryon_core::frames::BodyFrame;
+use tryon_core::math::{Iso3, Real, UnitQuat, Vec3};
+use tryon_core::mesh::PolyMesh;
+use tryon_core::shapes::{icosphere, scale_about};
+use tryon_core::stages::Collider;
+
+/// A random closed convex body: an icosphere scaled into an ellipsoid, rotated and moved.
+fn body_strategy() -> impl Strategy<Value = PolyMesh> {
+    (
+        1u32..4,
+        prop::array::uniform3(0.1..0.5f64),
+        prop::array::uniform3(-1.0..1.0f64),
+        prop::array::uniform3(-3.0..3.0f64),
+    )
+        .prop_map(|(sub, r, c, rot)| {
+            let center = Vec3::new(c[0], c[1], c[2]);
+            let mut m = icosphere(1.0, sub, center);
+            scale_about(&mut m, center, Vec3::new(r[0], r[1], r[2]));
+            let q = UnitQuat::from_scaled_axis(Vec3::new(rot[0], rot[1], rot[2]));
+            for p in &mut m.positions {
+                *p = center + q * (*p - center);
+            }
+            m
+        })
+}
+
+/// Points scattered through the body's neighbourhood (about half of them inside).
+fn points_near(m: &PolyMesh, seeds: &[[f64; 3]]) -> Vec<Vec3> {
+    let c: Vec3 = m.positions.iter().sum::<Vec3>() / m.positions.len() as Real;
+    seeds
+        .iter()
+        .enumerate()
+        .map(|(i, s)| {
+            let anchor = m.positions[(i * 7919) % m.positions.len()];
+            c + (anchor - c) * (0.2 + 1.2 * (s[0] + 1.0) / 2.0) + Vec3::new(s[1], s[2], s[0]) * 0.02
+        })
+        .collect()
+}
+
+fn seeds() -> impl Strategy<Value = Vec<[f64; 3]>> {
+    prop::collection::vec(prop::array::uniform3(-1.0..1.0f64), 1..120)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(40))]
+
+    /// After resolution no point is inside the body by the exact referee.
+    #[test]
+    fn nothing_inside_after_resolution(m in body_strategy(), s in seeds(), shift in prop::array::uniform3(-0.2..0.2f64)) {
+        let referee = ExactCollider::new(&m, 0.0).unwrap();
+        let mut tracker = NearestVertexCollider::new(&m, 0.0).unwrap();
+        let pts = points_near(&m, &s);
+        // A first call elsewhere so the second one starts from stale nearest vertices.
+        let mut first: Vec<Vec3> = pts.iter().map(|p| p + Vec3::new(shift[0], shift[1], shift[2])).collect();
+        tracker.resolve(&mut first, &mut Vec::new());
+        let mut pts2 = pts.clone();
+        let mut contacts = Vec::new();
+        tracker.resolve(&mut pts2, &mut contacts);
+        for (k, p) in pts2.iter().enumerate() {
+            let d = referee.signed_distance(p).unwrap();
+            prop_assert!(d >= -1e-9, "point {} at {:?} still {} inside", k, p, d);
+        }
+        for c in &contacts {
+            let before = referee.signed_distance(&pts[c.point as usize]).unwrap();
+            prop_assert!(c.depth >= -before - 1e-9);
+        }
+    }
+
+    /// On a sphere the hill-climb converges to the true nearest vertex from any start.
+    #[test]
+    fn tracking_finds_the_brute_force_nearest(sub in 1u32..5, r in 0.1..1.0f64, s in seeds(), s2 in seeds()) {
+        let m = icosphere(r, sub, Vec3::new(0.3, 1.0, -0.2));
+        let mut tracker = NearestVertexCollider::new(&m, 0.0).unwrap();
+        tracker.cull_margin = Real::INFINITY;
+        let start = points_near(&m, &s2);
+        let pts = points_near(&m, &s);
+        let n = pts.len().min(start.len());
+        tracker.track(&start[..n]);
+        tracker.track(&pts[..n]);
+        for (k, p) in pts[..n].iter().enumerate() {
+            let brute = tracker.body.nearest_vertex_brute(p);
+            let dt = (tracker.body.positions[tracker.nearest[k] as usize] - p).norm();
+            let db = (tracker.body.positions[brute as usize] - p).norm();
+            prop_assert!(dt <= db + 1e-12, "point {}: tracked {} at {}, brute {} at {}", k, tracker.nearest[k], dt, brute, db);
+        }
+    }
+
+    /// A rigid motion of the body moves followed points by exactly that motion.
+    #[test]
+    fn following_is_exact_under_rigid_motion(m in body_strategy(), s in seeds(), rot in prop::array::uniform3(-3.0..3.0f64), tr in prop::array::uniform3(-1.0..1.0f64)) {
+        let body = BodyMesh::new(&m).unwrap();
+        let referee = ExactCollider::new(&m, 0.0).unwrap();
+        // Points within the full-follow band, on both sides of the surface.
+        let pts: Vec<Vec3> = points_near(&m, &s)
+            .into_iter()
+            .filter_map(|p| {
+                let pr = referee.project(&p)?;
+                let n = (p - pr.point).try_normalize(1e-12)?;
+                Some(pr.point + n * 0.004 * s[0][0])
+            })
+            .collect();
+        let mut follower = BodyFollower::new(body, FollowParams { near: 0.01, far: 0.02 });
+        follower.record(&pts);
+        let iso = Iso3::new(Vec3::new(tr[0], tr[1], tr[2]), Vec3::new(rot[0], rot[1], rot[2]));
+        let frame = BodyFrame { time: 0.0, positions: m.positions.iter().map(|p| iso.rotation * p + iso.translation.vector).collect(), velocities: vec![] };
+        let mut moved = pts.clone();
+        follower.apply(&frame, &mut moved).unwrap();
+        let weights = follower.weights();
+        let full = weights.iter().filter(|w| **w == 1.0).count();
+        prop_assert!(2 * full >= pts.len(), "only {} of {} points within 4 mm are attached", full, pts.len());
+        for ((p, q), w) in pts.iter().zip(&moved).zip(&weights) {
+            let expected = iso.rotation * p + iso.translation.vector;
+            if *w == 1.0 {
+                prop_assert!((q - expected).norm() < 1e-9, "followed to {:?}, rigid motion gives {:?}", q, expected);
+            } else if *w == 0.0 {
+                prop_assert_eq!(p, q);
+            }
+        }
+    }
+}
+
+#[test]
+fn referee_signs_match_the_sphere() {
+    let m = icosphere(0.5, 4, Vec3::zeros());
+    let referee = ExactCollider::new(&m, 0.0).unwrap();
+    for (p, inside) in [
+        (Vec3::new(0.1, 0.2, 0.0), true),
+        (Vec3::new(0.6, 0.0, 0.1), false),
+        (Vec3::zeros(), true),
+    ] {
+        let d = referee.signed_distance(&p).unwrap();
+        assert_eq!(d < 0.0, inside, "{p:?}: {d}");
+        // The tessellated sphere lies within 0.5% of the analytic one.
+        assert!((d - (p.norm() - 0.5)).abs() < 0.005, "{p:?}: {d}");
+    }
+}
+
+#[test]
+fn thickness_keeps_points_off_the_surface_and_reports_contacts() {
+    let m = icosphere(0.3, 3, Vec3::zeros());
+    let mut tracker = NearestVertexCollider::new(&m, 0.002).unwrap();
+    let referee = ExactCollider::new(&m, 0.0).unwrap();
+    let mut pts = vec![
+        Vec3::new(0.0, 0.25, 0.0),
+        Vec3::new(0.0, 0.301, 0.0),
+        Vec3::new(0.0, 0.5, 0.0),
+    ];
+    let mut contacts = Vec::new();
+    tracker.resolve(&mut pts, &mut contacts);
+    assert_eq!(
+        contacts.len(),
+        2,
+        "the deep point and the one inside the skin"
+    );
+    assert!((contacts[0].depth - 0.05).abs() < 0.005);
+    assert!(contacts[0].normal.y > 0.9);
+    for p in &pts[..2] {
+        let d = referee.signed_distance(p).unwrap();
+        assert!(
+            (d - 0.002).abs() < 1e-9,
+            "point at {d} from the surface, expected the 2 mm skin"
+        );
+    }
+    assert_eq!(pts[2], Vec3::new(0.0, 0.5, 0.0));
+}
+
+#[test]
+fn wrong_body_frames_are_rejected_not_panicking() {
+    let m = icosphere(0.3, 1, Vec3::zeros());
+    let mut tracker = NearestVertexCollider::new(&m, 0.0).unwrap();
+    tracker.update(&BodyFrame {
+        time: 0.0,
+        positions: vec![Vec3::zeros(); 3],
+        velocities: vec![],
+    });
+    assert_eq!(tracker.rejected_frames, 1);
+    let mut pts = vec![Vec3::zeros()];
+    tracker.resolve(&mut pts, &mut Vec::new());
+    // Moved out onto a face of the level-1 icosphere (face centres lie 0.28 m from its centre).
+    assert!(pts[0].norm() > 0.27, "{:?}", pts[0]);
+}

@@ -1,0 +1,134 @@
+//! P1 section 3.3: collision by nearest-vertex tracking (after Igarashi & Hughes). Every point keeps
+//! its nearest body vertex, refreshed each call by a hill-climb from last call's vertex. A point is
+//! inside when it is behind every face around that vertex (with a skin of `thickness`), and is then
+//! moved onto the nearest of those faces, `thickness` out along its normal. Only points are
+//! resolved, never edges (P1: resolving coarse edges distorts the final surface).
+
+use crate::body::{BodyError, BodyMesh};
+use tryon_core::frames::{BodyFrame, Contact};
+use tryon_core::math::{Real, Vec3};
+use tryon_core::mesh::PolyMesh;
+use tryon_core::stages::Collider;
+
+/// P1's nearest-vertex tracking collider.
+#[derive(Clone, Debug)]
+pub struct NearestVertexCollider {
+    pub body: BodyMesh,
+    /// Distance the cloth keeps from the body surface (m).
+    pub thickness: Real,
+    /// Last known nearest body vertex of each point (empty until the first call).
+    pub nearest: Vec<u32>,
+    /// Points farther than this outside the body's bounding box are skipped (m).
+    pub cull_margin: Real,
+    /// Body shape updates rejected for a wrong vertex count.
+    pub rejected_frames: u32,
+    bounds: (Vec3, Vec3),
+}
+
+impl NearestVertexCollider {
+    /// A collider for a body mesh in its current shape.
+    pub fn new(mesh: &PolyMesh, thickness: Real) -> Result<Self, BodyError> {
+        let body = BodyMesh::new(mesh)?;
+        let bounds = body.bounds();
+        Ok(NearestVertexCollider {
+            body,
+            thickness,
+            nearest: Vec::new(),
+            cull_margin: 0.05,
+            rejected_frames: 0,
+            bounds,
+        })
+    }
+
+    /// Refreshes every point's nearest vertex (hill-climb, or brute force the first time).
+    pub fn track(&mut self, points: &[Vec3]) {
+        if self.nearest.len() != points.len() {
+            self.nearest = points
+                .iter()
+                .map(|p| self.body.nearest_vertex_brute(p))
+                .collect();
+            return;
+        }
+        for (i, p) in points.iter().enumerate() {
+            if self.near_bounds(p) {
+                self.nearest[i] = self.body.climb(p, self.nearest[i]);
+            }
+        }
+    }
+
+    #[inline]
+    fn near_bounds(&self, p: &Vec3) -> bool {
+        let m = self.cull_margin + self.thickness;
+        let (lo, hi) = &self.bounds;
+        p.x >= lo.x - m
+            && p.y >= lo.y - m
+            && p.z >= lo.z - m
+            && p.x <= hi.x + m
+            && p.y <= hi.y + m
+            && p.z <= hi.z + m
+    }
+
+    /// P1's inside test: behind every face around vertex `v` (offset by the thickness).
+    #[inline]
+    fn inside(&self, p: &Vec3, v: u32) -> bool {
+        let x = self.body.positions[v as usize];
+        let rel = p - x;
+        self.body
+            .vertex_faces
+            .row(v as usize)
+            .iter()
+            .all(|&f| rel.dot(&self.body.face_normals[f as usize]) < self.thickness)
+    }
+}
+
+impl Collider for NearestVertexCollider {
+    fn name(&self) -> &'static str {
+        "nearest_vertex"
+    }
+
+    fn update(&mut self, frame: &BodyFrame) {
+        if self.body.set_frame(frame).is_err() {
+            self.rejected_frames += 1;
+        }
+        self.bounds = self.body.bounds();
+    }
+
+    fn resolve(&mut self, points: &mut [Vec3], contacts: &mut Vec<Contact>) {
+        self.track(points);
+        for (i, p) in points.iter_mut().enumerate() {
+            if !self.near_bounds(p) {
+                continue;
+            }
+            let v = self.nearest[i];
+            if !self.inside(p, v) {
+                continue;
+            }
+            let (f, q, bary) = self.body.closest_on_fan(p, v);
+            let n = self.body.face_normals[f as usize];
+            let depth = (q - *p).norm().max(0.0);
+            *p = q + n * self.thickness;
+            contacts.push(Contact {
+                point: i as u32,
+                face: f,
+                bary,
+                normal: n,
+                depth,
+                body_velocity: self.body.velocity_at(f as usize, bary),
+            });
+        }
+    }
+
+    fn signed_distance(&self, p: &Vec3) -> Option<Real> {
+        let v = self.body.climb(p, self.body.nearest_vertex_brute(p));
+        let (_, q, _) = self.body.closest_on_fan(p, v);
+        let d = (p - q).norm();
+        let x = self.body.positions[v as usize];
+        let behind_all = self
+            .body
+            .vertex_faces
+            .row(v as usize)
+            .iter()
+            .all(|&f| (p - x).dot(&self.body.face_normals[f as usize]) < 0.0);
+        Some(if behind_all { -d } else { d })
+    }
+}
