@@ -1,1 +1,206 @@
-//! x
+//! Integration tests over the public APIs: the drape scene end to end, the hard cases of the
+//! foundation (a jumping body, a cloth that starts inside the body, bad meshes), determinism.
+
+use body_collide::{
+    BodyFollower, BodyMesh, ExactCollider, FollowParams, NearestVertexCollider, penetration_depths,
+};
+use cloth_dyn::{BuildClothError, ClothModel, ClothParams, ClothSim, IntegratorKind};
+use tryon_core::frames::BodyFrame;
+use tryon_core::math::{Real, Vec3, is_finite};
+use tryon_core::mesh::{Face, MeshError, PolyMesh, grid_xz};
+use tryon_core::shapes::icosphere;
+use tryon_core::topology::TopologyError;
+use tryon_pipeline::drape::drape_params;
+use tryon_pipeline::{CoarseLoop, DrapeConfig, DrapeScene};
+
+fn deepest(referee: &ExactCollider, x: &[Vec3]) -> Real {
+    penetration_depths(referee, x)
+        .into_iter()
+        .fold(0.0, Real::max)
+}
+
+/// A small cloth resting on a sphere, with body following, ready to be moved around.
+fn draped_loop(n: usize, frames: usize) -> (CoarseLoop, PolyMesh) {
+    let sphere = icosphere(0.3, 3, Vec3::zeros());
+    let params = drape_params(n);
+    let model = ClothModel::build(&grid_xz(n - 1, n - 1, 1.0, 1.0, 0.35), &params, vec![]).unwrap();
+    let sim = ClothSim::new(model, params, IntegratorKind::Rk4);
+    let collider = NearestVertexCollider::new(&sphere, 0.002).unwrap();
+    let follower = BodyFollower::new(BodyMesh::new(&sphere).unwrap(), FollowParams::default());
+    let mut l = CoarseLoop::new(sim, Box::new(collider), Some(follower));
+    for _ in 0..frames {
+        l.advance(None, 1.0 / 60.0);
+    }
+    (l, sphere)
+}
+
+fn moved(sphere: &PolyMesh, by: Vec3) -> (BodyFrame, PolyMesh) {
+    let mut m = sphere.clone();
+    for p in &mut m.positions {
+        *p += by;
+    }
+    (
+        BodyFrame {
+            time: 0.0,
+            positions: m.positions.clone(),
+            velocities: vec![],
+        },
+        m,
+    )
+}
+
+#[test]
+fn drape_scene_stays_finite_outside_and_bounded() {
+    let mut cfg = DrapeConfig::new(16, IntegratorKind::Rk4);
+    cfg.duration = 1.0;
+    let mut scene = DrapeScene::new(cfg).unwrap();
+    let r = scene.run(|_| {});
+    assert_eq!(r.frames, 60);
+    assert!(
+        scene
+            .frame
+            .positions
+            .iter()
+            .chain(&scene.frame.velocities)
+            .all(is_finite)
+    );
+    assert!(
+        r.max_penetration <= 1e-3,
+        "penetration {} m",
+        r.max_penetration
+    );
+    assert!(r.max_stretch <= 1.10, "stretch {}", r.max_stretch);
+    assert!(r.steps.contacts > 0, "the cloth should rest on the sphere");
+    let lowest = scene
+        .frame
+        .positions
+        .iter()
+        .map(|p| p.y)
+        .fold(Real::INFINITY, Real::min);
+    assert!(
+        lowest < 0.0,
+        "the cloth should hang below the sphere's top, lowest at {lowest}"
+    );
+    assert_eq!(
+        r.steps.retries + r.steps.rollbacks + r.steps.non_finite_events,
+        0
+    );
+}
+
+#[test]
+fn body_jumping_half_a_metre_leaves_no_particle_inside() {
+    for jump in [
+        Vec3::new(0.0, 0.5, 0.0),
+        Vec3::new(0.5, 0.0, 0.0),
+        Vec3::new(0.0, -0.2, 0.5),
+    ] {
+        let (mut l, sphere) = draped_loop(12, 40);
+        let (frame, moved_mesh) = moved(&sphere, jump);
+        let referee = ExactCollider::new(&moved_mesh, 0.0).unwrap();
+        let r = l.advance(Some(&frame), 1.0 / 60.0);
+        let depth = deepest(&referee, &l.frame.positions);
+        assert!(
+            depth <= 1e-9,
+            "after a jump of {jump:?} a particle is {depth} m inside"
+        );
+        assert!(l.frame.positions.iter().all(is_finite));
+        assert_eq!(r.rollbacks, 0);
+    }
+}
+
+#[test]
+fn following_carries_the_resting_cloth_with_the_body() {
+    let (mut l, sphere) = draped_loop(12, 60);
+    let top_before = l
+        .frame
+        .positions
+        .iter()
+        .map(|p| p.y)
+        .fold(Real::NEG_INFINITY, Real::max);
+    let (frame, _) = moved(&sphere, Vec3::new(0.0, 0.5, 0.0));
+    l.advance(Some(&frame), 1.0 / 60.0);
+    let top_after = l
+        .frame
+        .positions
+        .iter()
+        .map(|p| p.y)
+        .fold(Real::NEG_INFINITY, Real::max);
+    // The cloth on the sphere's top rises with it (less one frame of fall).
+    assert!(
+        top_after - top_before > 0.45,
+        "top went from {top_before} to {top_after}"
+    );
+}
+
+#[test]
+fn cloth_starting_inside_the_body_is_outside_after_one_step() {
+    let sphere = icosphere(0.3, 3, Vec3::zeros());
+    let referee = ExactCollider::new(&sphere, 0.0).unwrap();
+    let params = drape_params(20);
+    // A horizontal cloth through the sphere's middle.
+    let model = ClothModel::build(&grid_xz(19, 19, 1.0, 1.0, 0.1), &params, vec![]).unwrap();
+    let mut sim = ClothSim::new(model, params, IntegratorKind::Rk4);
+    let mut frame = sim.initial_frame();
+    assert!(
+        deepest(&referee, &frame.positions) > 0.1,
+        "the cloth must start inside"
+    );
+    let mut collider = NearestVertexCollider::new(&sphere, 0.002).unwrap();
+    tryon_core::stages::ClothSolver::step_frame(&mut sim, &mut frame, 1.0 / 60.0, &mut collider);
+    let depth = deepest(&referee, &frame.positions);
+    assert!(depth <= 1e-9, "a particle is still {depth} m inside");
+}
+
+#[test]
+fn bad_cloth_meshes_are_rejected_with_names() {
+    let p = ClothParams::default();
+    let mut zero_edge = grid_xz(2, 2, 1.0, 1.0, 0.0);
+    zero_edge.positions[4] = zero_edge.positions[1];
+    let e = ClothModel::build(&zero_edge, &p, vec![]).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            BuildClothError::Topology(TopologyError::Mesh(MeshError::ZeroLengthEdge { .. }))
+        ),
+        "{e}"
+    );
+    assert!(e.to_string().contains("zero-length edge"), "{e}");
+
+    let mut dup = grid_xz(2, 2, 1.0, 1.0, 0.0);
+    dup.positions.push(dup.positions[8]);
+    let e = ClothModel::build(&dup, &p, vec![]).unwrap_err();
+    assert!(
+        e.to_string().contains("vertices 8 and 9 are duplicates"),
+        "{e}"
+    );
+
+    let mut degenerate = grid_xz(2, 2, 1.0, 1.0, 0.0);
+    degenerate.positions.push(Vec3::new(0.75, 0.0, -0.5));
+    degenerate.faces.push(Face::Tri([0, 1, 9]));
+    let e = ClothModel::build(&degenerate, &p, vec![]).unwrap_err();
+    assert!(e.to_string().contains("face 4 is degenerate"), "{e}");
+
+    let nan = PolyMesh {
+        positions: vec![Vec3::new(0.0, Real::NAN, 0.0), Vec3::x(), Vec3::z()],
+        faces: vec![Face::Tri([0, 1, 2])],
+    };
+    let e = NearestVertexCollider::new(&nan, 0.0).unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("vertex 0 has a non-finite coordinate"),
+        "{e}"
+    );
+}
+
+#[test]
+fn drape_is_deterministic() {
+    let run = || {
+        let mut cfg = DrapeConfig::new(10, IntegratorKind::SymplecticEuler);
+        cfg.duration = 0.5;
+        cfg.measure_penetration = false;
+        let mut s = DrapeScene::new(cfg).unwrap();
+        s.run(|_| {});
+        s.frame.positions
+    };
+    assert_eq!(run(), run());
+}

@@ -1,1 +1,75 @@
-fn main() {}
+//! cargo xtask: project automation. `ci` (fmt, clippy, tests, tidy), `bench`, `drape`, `tidy`.
+
+mod drape;
+mod tidy;
+
+use std::process::{Command, ExitCode};
+
+const USAGE: &str = "usage: cargo xtask <command>
+
+commands:
+  ci                 cargo fmt --check, clippy -D warnings, all tests, tidy
+  bench [ARGS..]     criterion benchmarks (cargo bench -p tryon-benches -- ARGS)
+  drape [N..] [--integrator rk4|symplectic_euler|all] [--frames F] [--trace] [--set KEY=VALUE]
+                     run the drape scene (release) and print ms/frame, stretch, penetration
+  tidy               check the architecture invariants";
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let result = match args.first().map(String::as_str) {
+        Some("ci") => ci(),
+        Some("bench") => bench(&args[1..]),
+        Some("drape") => drape::run(&args[1..]),
+        Some("tidy") => tidy::run(),
+        Some("-h" | "--help" | "help") => {
+            println!("{USAGE}");
+            Ok(())
+        }
+        Some(other) => Err(format!("unknown command `{other}`\n\n{USAGE}")),
+        None => Err(USAGE.to_string()),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("xtask: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Runs cargo with arguments, failing with the command line on a non-zero exit.
+fn cargo(args: &[&str]) -> Result<(), String> {
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    eprintln!("xtask: cargo {}", args.join(" "));
+    let status = Command::new(&cargo)
+        .args(args)
+        .status()
+        .map_err(|e| format!("cannot run {cargo}: {e}"))?;
+    if status.success() {
+        Ok(())
+    } else {
+        Err(format!("`cargo {}` failed ({status})", args.join(" ")))
+    }
+}
+
+fn ci() -> Result<(), String> {
+    cargo(&["fmt", "--all", "--", "--check"])?;
+    cargo(&[
+        "clippy",
+        "--workspace",
+        "--all-targets",
+        "--",
+        "-D",
+        "warnings",
+    ])?;
+    tidy::run()?;
+    cargo(&["test", "--workspace", "--all-targets"])?;
+    // Benchmarks compile and run once each as tests (fast), so they cannot rot.
+    cargo(&["test", "-p", "tryon-benches", "--benches"])
+}
+
+fn bench(args: &[String]) -> Result<(), String> {
+    let mut a = vec!["bench", "-p", "tryon-benches", "--"];
+    a.extend(args.iter().map(String::as_str));
+    cargo(&a)
+}

@@ -7,7 +7,7 @@ use std::ops::Range;
 use thiserror::Error;
 use tryon_core::math::{Real, Vec3};
 use tryon_core::mesh::{Face, PolyMesh};
-use tryon_core::topology::{NO_FACE, Topology, TopologyError};
+use tryon_core::topology::{Csr, NO_FACE, Topology, TopologyError};
 
 /// Which family a spring belongs to.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -127,6 +127,10 @@ pub struct ClothModel {
     /// Triangulated view of the cloth mesh.
     pub triangles: Vec<[u32; 3]>,
     pub rest_positions: Vec<Vec3>,
+    /// Neighbours of each particle through structural and shear springs (the springs the strain
+    /// limit acts on), with the rest length of each link in `limit_graph_rest`.
+    pub limit_graph: Csr,
+    pub limit_graph_rest: Vec<Real>,
 }
 
 impl ClothModel {
@@ -201,7 +205,10 @@ impl ClothModel {
         for h in &handles {
             inv_mass[h.particle as usize] = 0.0;
         }
+        let (limit_graph, limit_graph_rest) = spring_graph(&springs, 0..shear.end, n);
         Ok(ClothModel {
+            limit_graph,
+            limit_graph_rest,
             springs,
             structural,
             shear,
@@ -225,6 +232,25 @@ impl ClothModel {
     pub fn total_mass(&self) -> Real {
         self.mass.iter().sum()
     }
+}
+
+/// Adjacency of particles through the springs in `range`, with each link's rest length.
+fn spring_graph(s: &SpringSet, range: Range<usize>, n: usize) -> (Csr, Vec<Real>) {
+    let mut rows: Vec<Vec<(u32, Real)>> = vec![Vec::new(); n];
+    for k in range {
+        rows[s.i[k] as usize].push((s.j[k], s.rest[k]));
+        rows[s.j[k] as usize].push((s.i[k], s.rest[k]));
+    }
+    let mut offsets = vec![0u32];
+    let (mut items, mut rest) = (Vec::new(), Vec::new());
+    for r in rows {
+        for (v, l) in r {
+            items.push(v);
+            rest.push(l);
+        }
+        offsets.push(items.len() as u32);
+    }
+    (Csr { offsets, items }, rest)
 }
 
 /// Bending pairs: across each interior edge (a, b) with faces F and G, for each end v of the edge, the

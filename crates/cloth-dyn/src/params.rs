@@ -36,6 +36,10 @@ pub struct ClothParams {
     pub max_strain: Option<Real>,
     /// Gauss-Seidel passes of the strain limit per substep.
     pub strain_iterations: u32,
+    /// Long-range tethers to contacts, pins and handles during the strain limit.
+    pub tethers: bool,
+    /// Over-relaxation of the strain limit's corrections (1 = plain Gauss-Seidel, < 2).
+    pub strain_relaxation: Real,
     /// A particle faster than this (m/s) counts as exploding.
     pub max_speed: Real,
     /// How many times a failing substep may be halved before offending particles are rolled back.
@@ -60,6 +64,8 @@ impl Default for ClothParams {
             auto_substep: true,
             max_strain: Some(1.02),
             strain_iterations: 4,
+            strain_relaxation: 1.0,
+            tethers: true,
             max_speed: 50.0,
             max_halvings: 16,
         }
@@ -139,6 +145,13 @@ impl ClothParams {
                 name: "max_strain",
                 value: s.to_string(),
                 expected: "a ratio >= 1",
+            });
+        }
+        if !(self.strain_relaxation > 0.0 && self.strain_relaxation < 2.0) {
+            return Err(ParamError {
+                name: "strain_relaxation",
+                value: self.strain_relaxation.to_string(),
+                expected: "a factor in (0, 2)",
             });
         }
         if self.max_halvings > 40 {

@@ -6,10 +6,13 @@ use crate::forces::{accelerations, stiffness_bounds};
 use crate::integrator::{Derivative, Integrator, IntegratorKind};
 use crate::model::ClothModel;
 use crate::params::ClothParams;
-use crate::strain::limit_strain;
+use crate::strain::{ContactPlane, Tethers, limit_strain};
 use tryon_core::frames::{CoarseFrame, Contact, StepReport};
 use tryon_core::math::{Real, Vec3, is_finite};
 use tryon_core::stages::{ClothSolver, Collider};
+
+/// Rejected substeps allowed per frame before offending particles are rolled back instead.
+const MAX_RETRIES_PER_FRAME: u32 = 64;
 
 /// A cloth simulation: the model, its parameters, an integrator and scratch memory. The state lives in
 /// the caller's [`CoarseFrame`].
@@ -25,6 +28,10 @@ pub struct ClothSim {
     backup_v: Vec<Vec3>,
     pre_limit: Vec<Vec3>,
     contacts: Vec<Contact>,
+    more_contacts: Vec<Contact>,
+    planes: Vec<ContactPlane>,
+    tethers: Tethers,
+    tethers_stale: bool,
 }
 
 impl std::fmt::Debug for ClothSim {
@@ -90,6 +97,10 @@ impl ClothSim {
             backup_v: z.clone(),
             pre_limit: z,
             contacts: Vec::new(),
+            more_contacts: Vec::new(),
+            planes: Vec::new(),
+            tethers: Tethers::default(),
+            tethers_stale: true,
         }
     }
 
@@ -137,16 +148,50 @@ impl ClothSim {
         for hd in &self.model.handles {
             x[hd.particle as usize] = hd.position(t + h);
         }
-        if let Some(ratio) = self.params.max_strain {
-            self.pre_limit.copy_from_slice(x);
-            limit_strain(&self.model, ratio, self.params.strain_iterations, x);
-            let inv_h = 1.0 / h;
-            for i in 0..x.len() {
-                v[i] += (x[i] - self.pre_limit[i]) * inv_h;
-            }
-        }
         self.contacts.clear();
         collider.resolve(x, &mut self.contacts);
+        if let Some(ratio) = self.params.max_strain {
+            self.planes.clear();
+            self.planes
+                .extend(self.contacts.iter().map(|c| ContactPlane {
+                    point: c.point,
+                    normal: c.normal,
+                    offset: c.normal.dot(&x[c.point as usize]),
+                }));
+            self.pre_limit.copy_from_slice(x);
+            let p = &self.params;
+            let tethers = if p.tethers && !self.model.handles.is_empty() {
+                if self.tethers_stale {
+                    self.tethers.compute(&self.model);
+                    self.tethers_stale = false;
+                }
+                Some(&self.tethers)
+            } else {
+                None
+            };
+            limit_strain(
+                &self.model,
+                ratio,
+                p.strain_iterations,
+                p.strain_relaxation,
+                x,
+                &self.planes,
+                tethers,
+            );
+            // The limit's corrections become velocity (as in position-based dynamics), capped at a
+            // quarter of the explosion speed so a teleport (a body jumping) is not turned into one.
+            let inv_h = 1.0 / h;
+            let cap = 0.25 * self.params.max_speed;
+            for i in 0..x.len() {
+                let dv = (x[i] - self.pre_limit[i]) * inv_h;
+                let n = dv.norm();
+                v[i] += if n > cap { dv * (cap / n) } else { dv };
+            }
+            // The limit may have pulled particles that were not in contact into the body.
+            self.more_contacts.clear();
+            collider.resolve(x, &mut self.more_contacts);
+            merge_contacts(&mut self.contacts, &self.more_contacts);
+        }
         let mu = self.params.friction;
         for c in &self.contacts {
             let p = c.point as usize;
@@ -185,6 +230,16 @@ impl ClothSim {
         }
         count
     }
+}
+
+/// Adds the contacts of `more` to `base`, keeping one contact (the later) per point.
+fn merge_contacts(base: &mut Vec<Contact>, more: &[Contact]) {
+    if more.is_empty() {
+        return;
+    }
+    let fresh: std::collections::HashSet<u32> = more.iter().map(|c| c.point).collect();
+    base.retain(|c| !fresh.contains(&c.point));
+    base.extend_from_slice(more);
 }
 
 /// Velocity after a contact: the inward normal part (relative to the body) is removed and the
@@ -231,9 +286,14 @@ impl ClothSolver for ClothSim {
             let last = t + h_try >= end;
             let (nonfinite, fast) = self.substep(frame, frame.time + t, h_try, last, collider);
             report.non_finite_events += nonfinite;
-            if nonfinite + fast == 0 || level >= self.params.max_halvings {
+            let give_up =
+                level >= self.params.max_halvings || report.retries >= MAX_RETRIES_PER_FRAME;
+            if nonfinite + fast == 0 || give_up {
                 if nonfinite + fast > 0 {
+                    // Even the smallest step failed: roll the offending particles back and carry on
+                    // at the nominal step, so a persistent failure cannot stall the frame.
                     report.rollbacks += self.roll_back(frame);
+                    (h, level, good) = (h_base, 0, 0);
                 }
                 t += h_try;
                 report.substeps += 1;
