@@ -110,6 +110,7 @@ fn apply_set(cfg: &mut DrapeConfig, key: &str, x: f64) -> Result<(), String> {
             p.k_bend *= x;
         }
         "thickness" => cfg.thickness = x,
+        "penetration" => cfg.measure_penetration = x != 0.0,
         "friction" => p.friction = x,
         _ => {
             return Err(format!(

@@ -63,9 +63,52 @@ fn ci() -> Result<(), String> {
         "warnings",
     ])?;
     tidy::run()?;
-    cargo(&["test", "--workspace", "--all-targets"])?;
     // Benchmarks compile and run once each as tests (fast), so they cannot rot.
-    cargo(&["test", "-p", "tryon-benches", "--benches"])
+    cargo(&["test", "-p", "tryon-benches", "--benches"])?;
+    let (passed, failed) = cargo_test_tally(&["test", "--workspace", "--all-targets"])?;
+    println!("tests: {passed} passed, {failed} failed");
+    if failed > 0 {
+        Err(format!("{failed} test(s) failed"))
+    } else {
+        Ok(())
+    }
+}
+
+/// Runs `cargo test ...`, echoing its output, and adds up its `test result:` lines.
+fn cargo_test_tally(args: &[&str]) -> Result<(u64, u64), String> {
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    eprintln!("xtask: cargo {}", args.join(" "));
+    let out = Command::new(&cargo)
+        .args(args)
+        .stderr(std::process::Stdio::inherit())
+        .output()
+        .map_err(|e| format!("cannot run {cargo}: {e}"))?;
+    let text = String::from_utf8_lossy(&out.stdout);
+    print!("{text}");
+    let (mut passed, mut failed) = (0, 0);
+    for line in text.lines().filter(|l| l.starts_with("test result:")) {
+        let count = |word: &str| -> u64 {
+            let words: Vec<&str> = line
+                .split([' ', ';', '.'])
+                .filter(|w| !w.is_empty())
+                .collect();
+            words
+                .windows(2)
+                .find(|w| w[1] == word)
+                .and_then(|w| w[0].parse().ok())
+                .unwrap_or(0)
+        };
+        passed += count("passed");
+        failed += count("failed");
+    }
+    if !out.status.success() && failed == 0 {
+        return Err(format!(
+            "`cargo {}` failed ({})",
+            args.join(" "),
+            out.status
+        ));
+    }
+    Ok((passed, failed))
 }
 
 fn bench(args: &[String]) -> Result<(), String> {

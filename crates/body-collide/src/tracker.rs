@@ -68,16 +68,42 @@ impl NearestVertexCollider {
             && p.z <= hi.z + m
     }
 
-    /// P1's inside test: behind every face around vertex `v` (offset by the thickness).
+    /// P1's inside test: behind every face around vertex `v` (offset by the thickness). Returns the
+    /// face whose plane the point is nearest behind and the point's height over that plane.
     #[inline]
-    fn inside(&self, p: &Vec3, v: u32) -> bool {
-        let x = self.body.positions[v as usize];
-        let rel = p - x;
-        self.body
-            .vertex_faces
-            .row(v as usize)
-            .iter()
-            .all(|&f| rel.dot(&self.body.face_normals[f as usize]) < self.thickness)
+    fn inside(&self, p: &Vec3, v: u32) -> Option<(u32, Real)> {
+        let rel = p - self.body.positions[v as usize];
+        let mut best = (u32::MAX, Real::NEG_INFINITY);
+        for &f in self.body.vertex_faces.row(v as usize) {
+            let h = rel.dot(&self.body.face_normals[f as usize]);
+            if h >= self.thickness {
+                return None;
+            }
+            if h > best.1 {
+                best = (f, h);
+            }
+        }
+        (best.0 != u32::MAX).then_some(best)
+    }
+
+    /// Barycentric coordinates of `q` (on or near the plane of triangle `f`), clamped into the triangle.
+    fn bary(&self, f: u32, q: &Vec3) -> [Real; 3] {
+        let [a, b, c] = self.body.corners(f as usize);
+        let (e1, e2, r) = (b - a, c - a, q - a);
+        let (d11, d12, d22, r1, r2) = (
+            e1.dot(&e1),
+            e1.dot(&e2),
+            e2.dot(&e2),
+            r.dot(&e1),
+            r.dot(&e2),
+        );
+        let det = d11 * d22 - d12 * d12;
+        if !(det > 0.0) {
+            return [1.0 / 3.0; 3];
+        }
+        let v = ((d22 * r1 - d12 * r2) / det).clamp(0.0, 1.0);
+        let w = ((d11 * r2 - d12 * r1) / det).clamp(0.0, 1.0 - v);
+        [1.0 - v - w, v, w]
     }
 }
 
@@ -99,20 +125,18 @@ impl Collider for NearestVertexCollider {
             if !self.near_bounds(p) {
                 continue;
             }
-            let v = self.nearest[i];
-            if !self.inside(p, v) {
+            let Some((f, height)) = self.inside(p, self.nearest[i]) else {
                 continue;
-            }
-            let (f, q, bary) = self.body.closest_on_fan(p, v);
+            };
             let n = self.body.face_normals[f as usize];
-            let depth = (q - *p).norm().max(0.0);
-            *p = q + n * self.thickness;
+            *p += n * (self.thickness - height);
+            let bary = self.bary(f, p);
             contacts.push(Contact {
                 point: i as u32,
                 face: f,
                 bary,
                 normal: n,
-                depth,
+                depth: (-height).max(0.0),
                 body_velocity: self.body.velocity_at(f as usize, bary),
             });
         }

@@ -20,24 +20,21 @@ fn spring_forces<const DAMP: bool, const RECORD: bool>(
     if RECORD {
         elastic.fill(Vec3::zeros());
     }
-    let s = &model.springs;
-    for k in 0..s.i.len() {
-        let (i, j) = (s.i[k] as usize, s.j[k] as usize);
+    for s in &model.packed {
+        let (i, j) = (s.i as usize, s.j as usize);
         let d = x[j] - x[i];
         let len2 = d.norm_squared();
-        let len = len2.sqrt();
-        let rest = s.rest[k];
-        let stretch = len - rest;
-        let kk = if stretch > 0.0 {
-            s.k_stretch[k]
+        let stretch = len2.sqrt() - s.rest;
+        let k = if stretch > 0.0 {
+            s.stretch_per_rest
         } else {
-            s.k_compress[k]
+            s.compress_per_rest
         };
-        let fe = d * (kk * stretch / rest);
+        let fe = d * (k * stretch);
         let mut f = fe;
         if DAMP && len2 > 1e-24 {
             let dv = v[j] - v[i];
-            f += d * (s.damping[k] * dv.dot(&d) / len2);
+            f += d * (s.damping * dv.dot(&d) / len2);
         }
         force[i] += f;
         force[j] -= f;
@@ -129,6 +126,7 @@ mod tests {
         let mut m = model(&p);
         // Keep only the first structural spring to look at it alone.
         m.springs.i.truncate(1);
+        m.packed.truncate(1);
         m.springs.j.truncate(1);
         let (i, j) = (m.springs.i[0] as usize, m.springs.j[0] as usize);
         let rest = m.springs.rest[0];

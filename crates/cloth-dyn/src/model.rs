@@ -55,6 +55,34 @@ impl SpringSet {
     }
 }
 
+/// One spring as the force loop reads it: both ends and every constant in one 40-byte record, with
+/// the stiffnesses already divided by rest length (eq. 1 uses k / L).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PackedSpring {
+    pub i: u32,
+    pub j: u32,
+    pub rest: Real,
+    pub stretch_per_rest: Real,
+    pub compress_per_rest: Real,
+    pub damping: Real,
+}
+
+impl SpringSet {
+    /// The springs packed for the force loop.
+    pub fn packed(&self) -> Vec<PackedSpring> {
+        (0..self.len())
+            .map(|k| PackedSpring {
+                i: self.i[k],
+                j: self.j[k],
+                rest: self.rest[k],
+                stretch_per_rest: self.k_stretch[k] / self.rest[k],
+                compress_per_rest: self.k_compress[k] / self.rest[k],
+                damping: self.damping[k],
+            })
+            .collect()
+    }
+}
+
 /// A particle that follows a scripted path (piecewise linear in time), as when P4's user drags the cloth.
 /// A path with a single key is a pin.
 #[derive(Clone, Debug, PartialEq)]
@@ -131,6 +159,10 @@ pub struct ClothModel {
     /// limit acts on), with the rest length of each link in `limit_graph_rest`.
     pub limit_graph: Csr,
     pub limit_graph_rest: Vec<Real>,
+    /// `springs` packed for the force loop (kept in step with `springs` by [`ClothModel::build`]).
+    pub packed: Vec<PackedSpring>,
+    /// Structural and shear springs packed for the strain limit.
+    pub limit_springs: Vec<crate::strain::LimitSpring>,
 }
 
 impl ClothModel {
@@ -207,6 +239,8 @@ impl ClothModel {
         }
         let (limit_graph, limit_graph_rest) = spring_graph(&springs, 0..shear.end, n);
         Ok(ClothModel {
+            limit_springs: crate::strain::limit_springs(&springs, shear.end, &inv_mass),
+            packed: springs.packed(),
             limit_graph,
             limit_graph_rest,
             springs,

@@ -32,6 +32,7 @@ pub struct ClothSim {
     planes: Vec<ContactPlane>,
     tethers: Tethers,
     tethers_stale: bool,
+    stamp: Vec<bool>,
 }
 
 impl std::fmt::Debug for ClothSim {
@@ -101,6 +102,7 @@ impl ClothSim {
             planes: Vec::new(),
             tethers: Tethers::default(),
             tethers_stale: true,
+            stamp: Vec::new(),
         }
     }
 
@@ -190,7 +192,12 @@ impl ClothSim {
             // The limit may have pulled particles that were not in contact into the body.
             self.more_contacts.clear();
             collider.resolve(x, &mut self.more_contacts);
-            merge_contacts(&mut self.contacts, &self.more_contacts);
+            merge_contacts(
+                &mut self.contacts,
+                &self.more_contacts,
+                &mut self.stamp,
+                x.len(),
+            );
         }
         let mu = self.params.friction;
         for c in &self.contacts {
@@ -232,13 +239,18 @@ impl ClothSim {
     }
 }
 
-/// Adds the contacts of `more` to `base`, keeping one contact (the later) per point.
-fn merge_contacts(base: &mut Vec<Contact>, more: &[Contact]) {
+/// Adds the contacts of `more` to `base`, keeping one contact (the later) per point. `stamp` is
+/// scratch with one slot per point.
+fn merge_contacts(base: &mut Vec<Contact>, more: &[Contact], stamp: &mut Vec<bool>, points: usize) {
     if more.is_empty() {
         return;
     }
-    let fresh: std::collections::HashSet<u32> = more.iter().map(|c| c.point).collect();
-    base.retain(|c| !fresh.contains(&c.point));
+    stamp.clear();
+    stamp.resize(points, false);
+    for c in more {
+        stamp[c.point as usize] = true;
+    }
+    base.retain(|c| !stamp[c.point as usize]);
     base.extend_from_slice(more);
 }
 

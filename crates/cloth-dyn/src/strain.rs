@@ -106,38 +106,17 @@ pub fn limit_strain(
     planes: &[ContactPlane],
     tethers: Option<&Tethers>,
 ) -> usize {
-    let s = &model.springs;
-    let end = model.shear.end.max(model.structural.end);
+    let springs = &model.limit_springs;
     let mut last = 0;
     for it in 0..iterations {
         if let Some(t) = tethers {
             t.project(max_ratio, x);
         }
-        let mut count = 0;
-        let mut correct = |k: usize, x: &mut [Vec3]| {
-            let (i, j) = (s.i[k] as usize, s.j[k] as usize);
-            let (wi, wj) = (model.inv_mass[i], model.inv_mass[j]);
-            let w = wi + wj;
-            if w == 0.0 {
-                return;
-            }
-            let d = x[j] - x[i];
-            let max_len = max_ratio * s.rest[k];
-            let len2 = d.norm_squared();
-            if len2 <= max_len * max_len {
-                return;
-            }
-            let len = len2.sqrt();
-            let corr = d * (relaxation * (len - max_len) / (len * w));
-            x[i] += corr * wi;
-            x[j] -= corr * wj;
-            count += 1;
-        };
-        if it % 2 == 0 {
-            (0..end).for_each(|k| correct(k, x));
+        let count = if it % 2 == 0 {
+            limit_pass(springs.iter(), max_ratio, relaxation, x)
         } else {
-            (0..end).rev().for_each(|k| correct(k, x));
-        }
+            limit_pass(springs.iter().rev(), max_ratio, relaxation, x)
+        };
         for c in planes {
             let p = &mut x[c.point as usize];
             let d = c.normal.dot(p) - c.offset;
@@ -151,6 +130,65 @@ pub fn limit_strain(
         }
     }
     last
+}
+
+/// One Gauss-Seidel pass over `springs` in the given order; returns how many were corrected.
+#[inline]
+fn limit_pass<'a>(
+    springs: impl Iterator<Item = &'a LimitSpring>,
+    max_ratio: Real,
+    relaxation: Real,
+    x: &mut [Vec3],
+) -> usize {
+    let mut count = 0;
+    for s in springs {
+        let (i, j) = (s.i as usize, s.j as usize);
+        let d = x[j] - x[i];
+        let max_len = max_ratio * s.rest;
+        let len2 = d.norm_squared();
+        if len2 <= max_len * max_len {
+            continue;
+        }
+        let len = len2.sqrt();
+        let corr = d * (relaxation * (len - max_len) / len);
+        x[i] += corr * s.wi;
+        x[j] -= corr * s.wj;
+        count += 1;
+    }
+    count
+}
+
+/// A spring the strain limit acts on, with its ends' shares of a correction (inverse mass over the
+/// pair's total; zero for both when neither end can move, which makes the spring a no-op).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LimitSpring {
+    pub i: u32,
+    pub j: u32,
+    pub rest: Real,
+    pub wi: Real,
+    pub wj: Real,
+}
+
+/// The structural and shear springs of `model`'s spring set packed for the strain limit.
+pub fn limit_springs(
+    springs: &crate::model::SpringSet,
+    end: usize,
+    inv_mass: &[Real],
+) -> Vec<LimitSpring> {
+    (0..end)
+        .filter_map(|k| {
+            let (i, j) = (springs.i[k], springs.j[k]);
+            let (a, b) = (inv_mass[i as usize], inv_mass[j as usize]);
+            let w = a + b;
+            (w > 0.0).then(|| LimitSpring {
+                i,
+                j,
+                rest: springs.rest[k],
+                wi: a / w,
+                wj: b / w,
+            })
+        })
+        .collect()
 }
 
 #[cfg(test)]
