@@ -8,6 +8,7 @@ pub fn run(args: &[String]) -> Result<(), String> {
     let mut kinds = vec![IntegratorKind::Rk4, IntegratorKind::SymplecticEuler];
     let mut frames = None;
     let mut trace = false;
+    let mut png: Option<std::path::PathBuf> = None;
     let mut sets: Vec<(String, f64)> = Vec::new();
     let mut it = args.iter();
     while let Some(a) = it.next() {
@@ -31,6 +32,7 @@ pub fn run(args: &[String]) -> Result<(), String> {
                 );
             }
             "--trace" => trace = true,
+            "--png" => png = Some(it.next().ok_or("--png needs a file path")?.into()),
             "--set" => {
                 let v = it.next().ok_or("--set needs key=value")?;
                 let (k, x) = v
@@ -89,6 +91,9 @@ pub fn run(args: &[String]) -> Result<(), String> {
                 r.steps.retries,
                 r.steps.rollbacks
             );
+            if let Some(path) = &png {
+                picture(&scene, path)?;
+            }
         }
     }
     Ok(())
@@ -109,6 +114,9 @@ fn apply_set(cfg: &mut DrapeConfig, key: &str, x: f64) -> Result<(), String> {
             p.k_shear *= x;
             p.k_bend *= x;
         }
+        "bend_scale" => p.k_bend *= x,
+        "min_bend_ratio" => p.min_bend_ratio = if x > 0.0 { Some(x) } else { None },
+        "compress_scale" => p.k_compress *= x,
         "thickness" => cfg.thickness = x,
         "penetration" => cfg.measure_penetration = x != 0.0,
         "friction" => p.friction = x,
@@ -118,5 +126,27 @@ fn apply_set(cfg: &mut DrapeConfig, key: &str, x: f64) -> Result<(), String> {
             ));
         }
     }
+    Ok(())
+}
+
+/// Writes a picture of the scene's current frame (the last run's, when several run).
+fn picture(scene: &DrapeScene, path: &std::path::Path) -> Result<(), String> {
+    use tryon_io::{Camera, PreviewMesh, render, write_png};
+    let body = &scene.referee.body;
+    let meshes = [
+        PreviewMesh {
+            positions: &body.positions,
+            triangles: &body.triangles,
+            color: [190, 190, 200],
+        },
+        PreviewMesh {
+            positions: &scene.frame.positions,
+            triangles: &scene.sim.model.triangles,
+            color: [200, 70, 60],
+        },
+    ];
+    let cam = Camera::framing(&meshes);
+    write_png(path, &render(&meshes, &cam, 800, 600)).map_err(|e| e.to_string())?;
+    eprintln!("xtask: wrote {}", path.display());
     Ok(())
 }

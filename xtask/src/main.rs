@@ -10,7 +10,7 @@ const USAGE: &str = "usage: cargo xtask <command>
 commands:
   ci                 cargo fmt --check, clippy -D warnings, all tests, tidy
   bench [ARGS..]     criterion benchmarks (cargo bench -p tryon-benches -- ARGS)
-  drape [N..] [--integrator rk4|symplectic_euler|all] [--frames F] [--trace] [--set KEY=VALUE]
+  drape [N..] [--integrator rk4|symplectic_euler|all] [--frames F] [--trace] [--set KEY=VALUE] [--png FILE]
                      run the drape scene (release) and print ms/frame, stretch, penetration
   tidy               check the architecture invariants";
 

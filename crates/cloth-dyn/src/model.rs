@@ -163,6 +163,8 @@ pub struct ClothModel {
     pub packed: Vec<PackedSpring>,
     /// Structural and shear springs packed for the strain limit.
     pub limit_springs: Vec<crate::strain::LimitSpring>,
+    /// Bending springs packed for the bending limit.
+    pub bend_limit_springs: Vec<crate::strain::LimitSpring>,
 }
 
 impl ClothModel {
@@ -239,7 +241,8 @@ impl ClothModel {
         }
         let (limit_graph, limit_graph_rest) = spring_graph(&springs, 0..shear.end, n);
         Ok(ClothModel {
-            limit_springs: crate::strain::limit_springs(&springs, shear.end, &inv_mass),
+            limit_springs: crate::strain::limit_springs(&springs, 0..shear.end, &inv_mass),
+            bend_limit_springs: crate::strain::limit_springs(&springs, bend.clone(), &inv_mass),
             packed: springs.packed(),
             limit_graph,
             limit_graph_rest,

@@ -36,6 +36,10 @@ pub struct ClothParams {
     pub max_strain: Option<Real>,
     /// Gauss-Seidel passes of the strain limit per substep.
     pub strain_iterations: u32,
+    /// Bending limit: a bending spring (spanning two edges) may not get shorter than this ratio of
+    /// its rest length, which bounds the fold angle at every vertex so soft cloth folds broadly instead
+    /// of crumpling at the grid scale (`None` disables it). Structural edges may still shrink (P1).
+    pub min_bend_ratio: Option<Real>,
     /// Long-range tethers to contacts, pins and handles during the strain limit.
     pub tethers: bool,
     /// Over-relaxation of the strain limit's corrections (1 = plain Gauss-Seidel, < 2).
@@ -66,6 +70,7 @@ impl Default for ClothParams {
             strain_iterations: 4,
             strain_relaxation: 1.0,
             tethers: true,
+            min_bend_ratio: Some(0.95),
             max_speed: 50.0,
             max_halvings: 16,
         }
@@ -90,6 +95,7 @@ impl ClothParams {
             velocity_damping: 0.0,
             friction: 0.0,
             max_strain: None,
+            min_bend_ratio: None,
             ..ClothParams::default()
         }
     }
@@ -145,6 +151,15 @@ impl ClothParams {
                 name: "max_strain",
                 value: s.to_string(),
                 expected: "a ratio >= 1",
+            });
+        }
+        if let Some(r) = self.min_bend_ratio
+            && !(r > 0.0 && r <= 1.0)
+        {
+            return Err(ParamError {
+                name: "min_bend_ratio",
+                value: r.to_string(),
+                expected: "a ratio in (0, 1]",
             });
         }
         if !(self.strain_relaxation > 0.0 && self.strain_relaxation < 2.0) {

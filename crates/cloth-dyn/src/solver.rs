@@ -179,6 +179,7 @@ impl ClothSim {
                 x,
                 &self.planes,
                 tethers,
+                p.min_bend_ratio,
             );
             // The limit's corrections become velocity (as in position-based dynamics), capped at a
             // quarter of the explosion speed so a teleport (a body jumping) is not turned into one.

@@ -105,12 +105,17 @@ pub fn limit_strain(
     x: &mut [Vec3],
     planes: &[ContactPlane],
     tethers: Option<&Tethers>,
+    min_bend_ratio: Option<Real>,
 ) -> usize {
     let springs = &model.limit_springs;
     let mut last = 0;
     for it in 0..iterations {
         if let Some(t) = tethers {
             t.project(max_ratio, x);
+        }
+        // Bending first, so the stretch limit has the last word in every pass.
+        if let Some(r) = min_bend_ratio {
+            bend_pass(&model.bend_limit_springs, r, x);
         }
         let count = if it % 2 == 0 {
             limit_pass(springs.iter(), max_ratio, relaxation, x)
@@ -158,6 +163,23 @@ fn limit_pass<'a>(
     count
 }
 
+/// Pushes apart the ends of bending springs shorter than `min_ratio` times rest length.
+fn bend_pass(springs: &[LimitSpring], min_ratio: Real, x: &mut [Vec3]) {
+    for s in springs {
+        let (i, j) = (s.i as usize, s.j as usize);
+        let d = x[j] - x[i];
+        let min_len = min_ratio * s.rest;
+        let len2 = d.norm_squared();
+        if len2 >= min_len * min_len || len2 < 1e-24 {
+            continue;
+        }
+        let len = len2.sqrt();
+        let corr = d * ((len - min_len) / len);
+        x[i] += corr * s.wi;
+        x[j] -= corr * s.wj;
+    }
+}
+
 /// A spring the strain limit acts on, with its ends' shares of a correction (inverse mass over the
 /// pair's total; zero for both when neither end can move, which makes the spring a no-op).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -172,10 +194,10 @@ pub struct LimitSpring {
 /// The structural and shear springs of `model`'s spring set packed for the strain limit.
 pub fn limit_springs(
     springs: &crate::model::SpringSet,
-    end: usize,
+    range: std::ops::Range<usize>,
     inv_mass: &[Real],
 ) -> Vec<LimitSpring> {
-    (0..end)
+    range
         .filter_map(|k| {
             let (i, j) = (springs.i[k], springs.j[k]);
             let (a, b) = (inv_mass[i as usize], inv_mass[j as usize]);
@@ -227,9 +249,9 @@ mod tests {
         let mut tethers = Tethers::default();
         tethers.compute(&m);
         let mut with = stretched(&m);
-        limit_strain(&m, 1.02, 2, 1.0, &mut with, &[], Some(&tethers));
+        limit_strain(&m, 1.02, 2, 1.0, &mut with, &[], Some(&tethers), None);
         let mut without = stretched(&m);
-        limit_strain(&m, 1.02, 2, 1.0, &mut without, &[], None);
+        limit_strain(&m, 1.02, 2, 1.0, &mut without, &[], None, None);
         let (w, wo) = (worst(&with), worst(&without));
         assert!(w < 1.03, "with tethers the strip is at {w}");
         assert!(
@@ -254,7 +276,7 @@ mod tests {
             .map(|p| p.component_mul(&Vec3::new(1.5, 1.0, 1.0)))
             .collect();
         let before: Vec3 = x.iter().zip(&m.mass).map(|(p, m)| p * *m).sum();
-        limit_strain(&m, 1.05, 50, 1.0, &mut x, &[], None);
+        limit_strain(&m, 1.05, 50, 1.0, &mut x, &[], None, None);
         let after: Vec3 = x.iter().zip(&m.mass).map(|(p, m)| p * *m).sum();
         assert!((before - after).norm() < 1e-12);
         for k in 0..m.shear.end {

@@ -61,8 +61,8 @@ impl DrapeConfig {
 
 /// The drape material at n particles per side. An explicit integrator at a fixed substep can only
 /// hold springs whose stiffness scales with particle mass (k / m bounds the stable step), so the
-/// springs are soft and inextensibility comes from Provot's strain limit; the compress/stretch
-/// ratio of P1 is kept.
+/// springs are soft: inextensibility comes from Provot's strain limit, and broad folds (instead of
+/// grid-scale crumpling) from the bending limit; the compress/stretch ratio of P1 is kept.
 pub fn drape_params(n: usize) -> ClothParams {
     let base = ClothParams::default();
     let h = 1.0 / (n.max(2) - 1) as Real;
@@ -77,6 +77,7 @@ pub fn drape_params(n: usize) -> ClothParams {
         max_strain: Some(1.02),
         strain_iterations: 6,
         strain_relaxation: 1.8,
+        min_bend_ratio: Some(0.97),
         ..base
     }
 }
