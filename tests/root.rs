@@ -204,3 +204,28 @@ fn drape_is_deterministic() {
     };
     assert_eq!(run(), run());
 }
+
+#[test]
+fn stretch_guard_bounds_the_impact_peak_and_reports_its_retries() {
+    let run = |guard: Option<Real>| {
+        let mut cfg = DrapeConfig::new(24, IntegratorKind::Rk4);
+        cfg.duration = 1.0;
+        cfg.measure_penetration = false;
+        cfg.params.strain_iterations = 2;
+        cfg.params.stretch_guard = guard;
+        DrapeScene::new(cfg).unwrap().run(|_| {})
+    };
+    let (free, guarded) = (run(None), run(Some(1.06)));
+    assert!(
+        free.max_stretch > 1.08,
+        "without the guard the impact should overstretch ({})",
+        free.max_stretch
+    );
+    assert!(
+        guarded.max_stretch < free.max_stretch,
+        "{} vs {}",
+        guarded.max_stretch,
+        free.max_stretch
+    );
+    assert!(guarded.steps.retries > 0 && free.steps.retries == 0);
+}

@@ -115,6 +115,8 @@ fn apply_set(cfg: &mut DrapeConfig, key: &str, x: f64) -> Result<(), String> {
             p.k_bend *= x;
         }
         "bend_scale" => p.k_bend *= x,
+        "long_range" => p.long_range = x != 0.0,
+        "stretch_guard" => p.stretch_guard = if x > 0.0 { Some(x) } else { None },
         "min_bend_ratio" => p.min_bend_ratio = if x > 0.0 { Some(x) } else { None },
         "compress_scale" => p.k_compress *= x,
         "thickness" => cfg.thickness = x,

@@ -10,6 +10,7 @@
 
 pub mod forces;
 pub mod integrator;
+pub mod lines;
 pub mod model;
 pub mod params;
 pub mod solver;

@@ -165,6 +165,8 @@ pub struct ClothModel {
     pub limit_springs: Vec<crate::strain::LimitSpring>,
     /// Bending springs packed for the bending limit.
     pub bend_limit_springs: Vec<crate::strain::LimitSpring>,
+    /// Stretch-only constraints along straight lines, coarse scales first (see [`crate::lines`]).
+    pub long_range_springs: Vec<crate::strain::LimitSpring>,
 }
 
 impl ClothModel {
@@ -240,7 +242,17 @@ impl ClothModel {
             inv_mass[h.particle as usize] = 0.0;
         }
         let (limit_graph, limit_graph_rest) = spring_graph(&springs, 0..shear.end, n);
+        let long_range_springs = if params.long_range {
+            let scales = crate::lines::default_scales(n);
+            crate::lines::long_range_pairs(mesh, &topology, &scales)
+                .into_iter()
+                .filter_map(|(i, j, rest)| crate::strain::LimitSpring::new(i, j, rest, &inv_mass))
+                .collect()
+        } else {
+            Vec::new()
+        };
         Ok(ClothModel {
+            long_range_springs,
             limit_springs: crate::strain::limit_springs(&springs, 0..shear.end, &inv_mass),
             bend_limit_springs: crate::strain::limit_springs(&springs, bend.clone(), &inv_mass),
             packed: springs.packed(),

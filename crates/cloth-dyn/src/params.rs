@@ -40,6 +40,12 @@ pub struct ClothParams {
     /// its rest length, which bounds the fold angle at every vertex so soft cloth folds broadly instead
     /// of crumpling at the grid scale (`None` disables it). Structural edges may still shrink (P1).
     pub min_bend_ratio: Option<Real>,
+    /// Long-range stretch constraints along straight lines of quad meshes (see `lines`).
+    pub long_range: bool,
+    /// Quality guard: a substep that leaves any structural edge longer than this ratio of rest (when
+    /// none was before it) is retried at half the step (at most `STRETCH_HALVINGS` times, counted as retries); spends time
+    /// only where the cloth moves fast, as at an impact. `None` disables it.
+    pub stretch_guard: Option<Real>,
     /// Long-range tethers to contacts, pins and handles during the strain limit.
     pub tethers: bool,
     /// Over-relaxation of the strain limit's corrections (1 = plain Gauss-Seidel, < 2).
@@ -70,6 +76,8 @@ impl Default for ClothParams {
             strain_iterations: 4,
             strain_relaxation: 1.0,
             tethers: true,
+            long_range: false,
+            stretch_guard: None,
             min_bend_ratio: Some(0.95),
             max_speed: 50.0,
             max_halvings: 16,
@@ -160,6 +168,15 @@ impl ClothParams {
                 name: "min_bend_ratio",
                 value: r.to_string(),
                 expected: "a ratio in (0, 1]",
+            });
+        }
+        if let Some(r) = self.stretch_guard
+            && !(r.is_finite() && r > 1.0)
+        {
+            return Err(ParamError {
+                name: "stretch_guard",
+                value: r.to_string(),
+                expected: "a ratio > 1",
             });
         }
         if !(self.strain_relaxation > 0.0 && self.strain_relaxation < 2.0) {

@@ -11,6 +11,10 @@ use tryon_core::frames::{CoarseFrame, Contact, StepReport};
 use tryon_core::math::{Real, Vec3, is_finite};
 use tryon_core::stages::{ClothSolver, Collider};
 
+/// How many times the stretch guard may halve a substep. The guard retries only substeps that
+/// caused the over-stretch themselves.
+pub const STRETCH_HALVINGS: u32 = 3;
+
 /// Rejected substeps allowed per frame before offending particles are rolled back instead.
 const MAX_RETRIES_PER_FRAME: u32 = 64;
 
@@ -301,7 +305,23 @@ impl ClothSolver for ClothSim {
             report.non_finite_events += nonfinite;
             let give_up =
                 level >= self.params.max_halvings || report.retries >= MAX_RETRIES_PER_FRAME;
-            if nonfinite + fast == 0 || give_up {
+            // Only a substep that itself caused the over-stretch is retried: stretch that was there
+            // before it (a body that jumped, a handle yanked) does not shrink with the step.
+            let overstretched = nonfinite + fast == 0
+                && level < STRETCH_HALVINGS
+                && report.retries < MAX_RETRIES_PER_FRAME
+                && self.params.stretch_guard.is_some_and(|r| {
+                    self.overstretched(&frame.positions, r)
+                        && !self.overstretched(&self.backup_x, r)
+                });
+            if overstretched {
+                frame.positions.copy_from_slice(&self.backup_x);
+                frame.velocities.copy_from_slice(&self.backup_v);
+                report.retries += 1;
+                h = h_try * 0.5;
+                level += 1;
+                good = 0;
+            } else if nonfinite + fast == 0 || give_up {
                 if nonfinite + fast > 0 {
                     // Even the smallest step failed: roll the offending particles back and carry on
                     // at the nominal step, so a persistent failure cannot stall the frame.
@@ -337,6 +357,15 @@ impl ClothSolver for ClothSim {
 }
 
 impl ClothSim {
+    /// True when some structural edge is longer than `ratio` times its rest length.
+    fn overstretched(&self, x: &[Vec3], ratio: Real) -> bool {
+        let s = &self.model.springs;
+        self.model.structural.clone().any(|k| {
+            let (i, j) = (s.i[k] as usize, s.j[k] as usize);
+            (x[i] - x[j]).norm_squared() > (ratio * s.rest[k]).powi(2)
+        })
+    }
+
     /// Restores every non-finite or too-fast particle to its state before the substep, at rest.
     fn roll_back(&self, frame: &mut CoarseFrame) -> u32 {
         let max2 = self.params.max_speed * self.params.max_speed;

@@ -117,6 +117,8 @@ pub fn limit_strain(
         if let Some(r) = min_bend_ratio {
             bend_pass(&model.bend_limit_springs, r, x);
         }
+        // Long-range constraints (coarse scales first) before the springs themselves.
+        limit_pass(model.long_range_springs.iter(), max_ratio, 1.0, x);
         let count = if it % 2 == 0 {
             limit_pass(springs.iter(), max_ratio, relaxation, x)
         } else {
@@ -189,6 +191,21 @@ pub struct LimitSpring {
     pub rest: Real,
     pub wi: Real,
     pub wj: Real,
+}
+
+impl LimitSpring {
+    /// A limit spring between i and j, or `None` when neither end can move.
+    pub fn new(i: u32, j: u32, rest: Real, inv_mass: &[Real]) -> Option<Self> {
+        let (a, b) = (inv_mass[i as usize], inv_mass[j as usize]);
+        let w = a + b;
+        (w > 0.0).then(|| LimitSpring {
+            i,
+            j,
+            rest,
+            wi: a / w,
+            wj: b / w,
+        })
+    }
 }
 
 /// The structural and shear springs of `model`'s spring set packed for the strain limit.

@@ -78,6 +78,7 @@ pub fn drape_params(n: usize) -> ClothParams {
         strain_iterations: 6,
         strain_relaxation: 1.8,
         min_bend_ratio: Some(0.97),
+        stretch_guard: Some(1.1),
         ..base
     }
 }
