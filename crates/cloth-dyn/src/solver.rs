@@ -314,15 +314,16 @@ impl ClothSolver for ClothSim {
                     self.overstretched(&frame.positions, r)
                         && !self.overstretched(&self.backup_x, r)
                 });
-            if overstretched {
+            let ok = nonfinite + fast == 0;
+            if overstretched || !(ok || give_up) {
                 frame.positions.copy_from_slice(&self.backup_x);
                 frame.velocities.copy_from_slice(&self.backup_v);
                 report.retries += 1;
                 h = h_try * 0.5;
                 level += 1;
                 good = 0;
-            } else if nonfinite + fast == 0 || give_up {
-                if nonfinite + fast > 0 {
+            } else {
+                if !ok {
                     // Even the smallest step failed: roll the offending particles back and carry on
                     // at the nominal step, so a persistent failure cannot stall the frame.
                     report.rollbacks += self.roll_back(frame);
@@ -339,13 +340,6 @@ impl ClothSolver for ClothSim {
                         good = 0;
                     }
                 }
-            } else {
-                frame.positions.copy_from_slice(&self.backup_x);
-                frame.velocities.copy_from_slice(&self.backup_v);
-                report.retries += 1;
-                h = h_try * 0.5;
-                level += 1;
-                good = 0;
             }
         }
         frame.time += dt;
