@@ -66,7 +66,19 @@ pub fn run(args: &[String]) -> Result<(), String> {
                 apply_set(&mut cfg, key, *x)?;
             }
             let mut scene = DrapeScene::new(cfg).map_err(|e| e.to_string())?;
+            let progress = std::io::IsTerminal::is_terminal(&std::io::stderr()) && !trace;
             let r = scene.run(|f| {
+                if progress && (f.frame % 10 == 0 || f.frame == f.frames) {
+                    eprint!(
+                        "\rxtask: drape N = {n} {}: frame {}/{}",
+                        k.as_str(),
+                        f.frame,
+                        f.frames
+                    );
+                    if f.frame == f.frames {
+                        eprint!("\r\x1b[2K");
+                    }
+                }
                 if trace {
                     eprintln!(
                         "frame {:4}/{}: {:.3} ms, stretch {:.4} at {:.3?}, contacts {}",

@@ -2,7 +2,7 @@
 //! - stage crates depend on tryon-core and external crates only, never on each other;
 //! - only tryon-cli and xtask print or use anyhow;
 //! - every Rust source file opens with a `//!` line saying what it is for;
-//! - no `todo!`, `unimplemented!`, `dbg!` or `#[ignore]` in the tree.
+//! - no to-do or unimplemented macros, debug-print macros or ignored tests in the tree.
 
 use std::fs;
 use std::path::{Path, PathBuf};
