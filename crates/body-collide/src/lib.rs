@@ -5,18 +5,28 @@
 //!   behind every face incident to that vertex, and is then moved onto the nearest of those faces.
 //! - [`ExactCollider`]: closest point on the whole triangle mesh (parry3d-f64, with pseudo-normal
 //!   inside tests): the referee that measures every other collider.
+//! - [`Mannequin`]: a parametric body from measurements (mesh, skeleton, skin weights), posed by
+//!   [`SkinnedBody`] (linear blend skinning); [`girth_at`] measures it by slicing.
 //! - [`BodyFollower`]: P1.3.4, points keep their coordinates relative to their nearest body face when
 //!   the body moves.
 
 pub mod body;
 pub mod exact;
 pub mod follow;
+pub mod girth;
+pub mod mannequin;
+pub mod skin;
 pub mod tracker;
 
 pub use body::{BodyError, BodyMesh};
 pub use exact::{ExactCollider, penetration_depths};
 pub use follow::{BodyFollower, FollowParams};
+pub use girth::girth_at;
+pub use mannequin::{JOINT_NAMES, Mannequin};
+pub use skin::{SkinWeights, SkinnedBody, joint_transforms};
 pub use tracker::NearestVertexCollider;
 
+#[cfg(test)]
+mod mannequin_tests;
 #[cfg(test)]
 mod tests;

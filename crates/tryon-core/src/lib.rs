@@ -4,6 +4,7 @@
 
 pub mod frames;
 pub mod math;
+pub mod measure;
 pub mod mesh;
 pub mod pose;
 pub mod shapes;
@@ -12,5 +13,6 @@ pub mod topology;
 
 pub use frames::{BodyFrame, CoarseFrame, Contact, FineSurface, FineVertexSource, StepReport};
 pub use math::{Real, Vec3};
+pub use measure::{Landmarks, MeasureError, Measurements};
 pub use mesh::{Face, MeshError, PolyMesh};
 pub use topology::{Topology, TopologyError};

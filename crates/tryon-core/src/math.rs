@@ -6,6 +6,8 @@ pub type Real = f64;
 pub type Vec3 = nalgebra::Vector3<Real>;
 /// A unit quaternion of `Real`.
 pub type UnitQuat = nalgebra::UnitQuaternion<Real>;
+/// A 3x3 matrix of `Real` (rotations, skinning).
+pub type Mat3 = nalgebra::Matrix3<Real>;
 /// A rigid transform (rotation then translation).
 pub type Iso3 = nalgebra::Isometry3<Real>;
 

@@ -1,0 +1,170 @@
+//! Linear blend skinning: up to four joint influences per vertex, and a skinned body that turns a
+//! pose into a deformed body frame (positions, and velocities by finite difference).
+
+use tryon_core::frames::BodyFrame;
+use tryon_core::math::{Mat3, Real, Vec3};
+use tryon_core::pose::{Pose, Skeleton};
+use tryon_core::stages::BodyModel;
+
+
+/// Skinning weights: per vertex four (joint, weight) pairs; unused slots have weight 0; weights sum to 1.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SkinWeights {
+    pub joints: Vec<[u16; 4]>,
+    pub weights: Vec<[Real; 4]>,
+}
+
+impl SkinWeights {
+    /// Merges repeated joints, keeps the strongest four influences and normalises them to sum 1.
+    /// A vertex with no positive influence is bound to joint 0.
+    pub fn from_influences(infl: &[Vec<(usize, Real)>]) -> Self {
+        let mut out = SkinWeights::default();
+        for list in infl {
+            let mut merged: Vec<(usize, Real)> = Vec::new();
+            for &(j, w) in list {
+                if !(w > 0.0) {
+                    continue;
+                }
+                match merged.iter_mut().find(|e| e.0 == j) {
+                    Some(e) => e.1 += w,
+                    None => merged.push((j, w)),
+                }
+            }
+            merged.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+            merged.truncate(4);
+            let sum: Real = merged.iter().map(|e| e.1).sum();
+            let mut joints = [0u16; 4];
+            let mut weights = [0.0; 4];
+            if sum > 0.0 {
+                for (k, &(j, w)) in merged.iter().enumerate() {
+                    joints[k] = j as u16;
+                    weights[k] = w / sum;
+                }
+            } else {
+                weights[0] = 1.0;
+            }
+            out.joints.push(joints);
+            out.weights.push(weights);
+        }
+        out
+    }
+
+    pub fn len(&self) -> usize {
+        self.joints.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.joints.is_empty()
+    }
+}
+
+/// Global rotation and position of every joint for `pose` (rotations relative to the rest pose,
+/// which has identity orientations).
+pub fn joint_transforms(
+    skeleton: &Skeleton,
+    joint_rest: &[Vec3],
+    pose: &Pose,
+) -> (Vec<Mat3>, Vec<Vec3>) {
+    let n = skeleton.parents.len();
+    let mut rot = Vec::with_capacity(n);
+    let mut pos = Vec::with_capacity(n);
+    for j in 0..n {
+        let local = pose
+            .local_rotations
+            .get(j)
+            .map_or(Mat3::identity(), |q| *q.to_rotation_matrix().matrix());
+        match skeleton.parents[j] {
+            Some(p) => {
+                let r: Mat3 = rot[p] * local;
+                let x: Vec3 = pos[p] + rot[p] * skeleton.rest_offsets[j];
+                rot.push(r);
+                pos.push(x);
+            }
+            None => {
+                rot.push(local);
+                pos.push(joint_rest[j] + pose.root_translation);
+            }
+        }
+    }
+    (rot, pos)
+}
+
+/// A body deformed by linear blend skinning.
+#[derive(Clone, Debug)]
+pub struct SkinnedBody {
+    pub rest_positions: Vec<Vec3>,
+    pub triangles: Vec<[u32; 3]>,
+    pub skeleton: Skeleton,
+    pub joint_rest: Vec<Vec3>,
+    pub skin: SkinWeights,
+    last: Option<(Real, Vec<Vec3>)>,
+}
+
+impl SkinnedBody {
+    /// A skinned body; `skin` must have one entry per rest position.
+    pub fn new(
+        rest_positions: Vec<Vec3>,
+        triangles: Vec<[u32; 3]>,
+        skeleton: Skeleton,
+        joint_rest: Vec<Vec3>,
+        skin: SkinWeights,
+    ) -> Self {
+        SkinnedBody {
+            rest_positions,
+            triangles,
+            skeleton,
+            joint_rest,
+            skin,
+            last: None,
+        }
+    }
+
+    /// Skins the rest positions into `out` for `pose`.
+    pub fn skin_into(&self, pose: &Pose, out: &mut Vec<Vec3>) {
+        let (rot, pos) = joint_transforms(&self.skeleton, &self.joint_rest, pose);
+        // Each joint's skinning transform x -> R (x - rest) + p, as R x + t.
+        let t: Vec<Vec3> = (0..rot.len())
+            .map(|j| pos[j] - rot[j] * self.joint_rest[j])
+            .collect();
+        out.clear();
+        out.extend(self.rest_positions.iter().enumerate().map(|(i, x)| {
+            let (js, ws) = (&self.skin.joints[i], &self.skin.weights[i]);
+            let mut acc = Vec3::zeros();
+            for k in 0..4 {
+                if ws[k] != 0.0 {
+                    let j = js[k] as usize;
+                    acc += (rot[j] * x + t[j]) * ws[k];
+                }
+            }
+            acc
+        }));
+    }
+}
+
+impl BodyModel for SkinnedBody {
+    fn vertex_count(&self) -> usize {
+        self.rest_positions.len()
+    }
+    fn triangles(&self) -> &[[u32; 3]] {
+        &self.triangles
+    }
+    fn pose(&mut self, pose: &Pose, out: &mut BodyFrame) {
+        out.time = pose.time;
+        self.skin_into(pose, &mut out.positions);
+        out.velocities.clear();
+        if let Some((t0, x0)) = &self.last {
+            let dt = pose.time - t0;
+            if dt > 0.0 && x0.len() == out.positions.len() {
+                out.velocities
+                    .extend(out.positions.iter().zip(x0).map(|(a, b)| (a - b) / dt));
+            }
+        }
+        match &mut self.last {
+            Some((t, x)) => {
+                *t = pose.time;
+                x.clone_from(&out.positions);
+            }
+            None => self.last = Some((pose.time, out.positions.clone())),
+        }
+    }
+}
