@@ -5,7 +5,13 @@ use tryon_core::math::{Real, Vec3};
 
 /// The girth of the cut through `y = h` around the vertical axis through (`x`, `z`), or `None` when
 /// the plane misses the mesh.
-pub fn girth_at(positions: &[Vec3], triangles: &[[u32; 3]], h: Real, x: Real, z: Real) -> Option<Real> {
+pub fn girth_at(
+    positions: &[Vec3],
+    triangles: &[[u32; 3]],
+    h: Real,
+    x: Real,
+    z: Real,
+) -> Option<Real> {
     // Cut points are keyed by the mesh element they lie on (a vertex or an edge) so that pieces can
     // be joined by union-find.
     let mut keys: Vec<(u32, u32)> = Vec::new();
@@ -60,15 +66,18 @@ pub fn girth_at(positions: &[Vec3], triangles: &[[u32; 3]], h: Real, x: Real, z:
         let r = root(&mut parent, i);
         groups.entry(r).or_default().push(pts[i]);
     }
-    let piece = groups.into_values().filter(|g| g.len() >= 3).min_by(|a, b| {
-        let d = |g: &Vec<[Real; 2]>| {
-            let n = g.len() as Real;
-            let cx = g.iter().map(|p| p[0]).sum::<Real>() / n;
-            let cz = g.iter().map(|p| p[1]).sum::<Real>() / n;
-            (cx - x).powi(2) + (cz - z).powi(2)
-        };
-        d(a).total_cmp(&d(b))
-    })?;
+    let piece = groups
+        .into_values()
+        .filter(|g| g.len() >= 3)
+        .min_by(|a, b| {
+            let d = |g: &Vec<[Real; 2]>| {
+                let n = g.len() as Real;
+                let cx = g.iter().map(|p| p[0]).sum::<Real>() / n;
+                let cz = g.iter().map(|p| p[1]).sum::<Real>() / n;
+                (cx - x).powi(2) + (cz - z).powi(2)
+            };
+            d(a).total_cmp(&d(b))
+        })?;
     Some(hull_perimeter(piece))
 }
 
@@ -91,7 +100,9 @@ pub fn hull_perimeter(mut p: Vec<[Real; 2]>) -> Real {
             Box::new(p.iter().rev())
         };
         for &q in iter {
-            while hull.len() >= start + 2 && cross(hull[hull.len() - 2], hull[hull.len() - 1], q) <= 0.0 {
+            while hull.len() >= start + 2
+                && cross(hull[hull.len() - 2], hull[hull.len() - 1], q) <= 0.0
+            {
                 hull.pop();
             }
             hull.push(q);
@@ -113,7 +124,14 @@ mod tests {
 
     #[test]
     fn hull_of_a_square_with_inner_points() {
-        let p = vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [0.5, 0.5], [0.2, 0.7]];
+        let p = vec![
+            [0.0, 0.0],
+            [1.0, 0.0],
+            [1.0, 1.0],
+            [0.0, 1.0],
+            [0.5, 0.5],
+            [0.2, 0.7],
+        ];
         assert!((hull_perimeter(p) - 4.0).abs() < 1e-12);
     }
 

@@ -11,7 +11,7 @@
 
 use crate::skin::SkinWeights;
 use tryon_core::math::{Real, Vec3};
-use tryon_core::measure::{Landmarks, MeasureError, Measurements};
+use tryon_core::measure::{Landmarks, MeasureError, Measurements, profile, smoothstep};
 use tryon_core::mesh::{Face, PolyMesh};
 use tryon_core::pose::Skeleton;
 
@@ -142,60 +142,25 @@ impl Builder {
         let c = self.pos[apex as usize];
         let mut score = 0.0;
         for i in 0..n {
-            let (p, q) = (self.pos[ring[i] as usize], self.pos[ring[(i + 1) % n] as usize]);
+            let (p, q) = (
+                self.pos[ring[i] as usize],
+                self.pos[ring[(i + 1) % n] as usize],
+            );
             score += (p - c).cross(&(q - c)).dot(&outward);
         }
         for i in 0..n {
             let (p, q) = (ring[i], ring[(i + 1) % n]);
-            self.tris
-                .push(if score >= 0.0 { [apex, p, q] } else { [apex, q, p] });
+            self.tris.push(if score >= 0.0 {
+                [apex, p, q]
+            } else {
+                [apex, q, p]
+            });
         }
     }
 }
 
 fn centroid(pos: &[Vec3], ids: &[u32]) -> Vec3 {
     ids.iter().map(|&v| pos[v as usize]).sum::<Vec3>() / ids.len().max(1) as Real
-}
-
-fn smoothstep(t: Real) -> Real {
-    let t = t.clamp(0.0, 1.0);
-    t * t * (3.0 - 2.0 * t)
-}
-
-/// Interpolates a piecewise profile of (key, values) with smoothstep between neighbouring keys
-/// (keys ascending): control values are met exactly and are local extrema or plateaus.
-fn profile<const N: usize>(keys: &[(Real, [Real; N])], y: Real) -> [Real; N] {
-    if y <= keys[0].0 {
-        return keys[0].1;
-    }
-    for w in keys.windows(2) {
-        let ((y0, v0), (y1, v1)) = (w[0], w[1]);
-        if y <= y1 {
-            let s = smoothstep((y - y0) / (y1 - y0));
-            return std::array::from_fn(|k| v0[k] + (v1[k] - v0[k]) * s);
-        }
-    }
-    keys[keys.len() - 1].1
-}
-
-/// Perimeter of the RING-gon sampling an ellipse of half-axes (1, aspect).
-fn unit_ellipse_perimeter(aspect: Real) -> Real {
-    let pt = |k: usize| {
-        let t = std::f64::consts::TAU * k as Real / RING as Real;
-        (t.cos(), aspect * t.sin())
-    };
-    (0..RING)
-        .map(|k| {
-            let (a, b) = (pt(k), pt(k + 1));
-            ((a.0 - b.0).powi(2) + (a.1 - b.1).powi(2)).sqrt()
-        })
-        .sum()
-}
-
-/// (half-width, half-depth, z-centre) of a ring of girth `g` and depth/width `aspect`.
-fn girth_section(g: Real, aspect: Real, c: Real) -> [Real; 3] {
-    let a = g / unit_ellipse_perimeter(aspect);
-    [a, a * aspect, c]
 }
 
 /// Heights from `y0` to `y1` (both included) at about `step` apart.
@@ -265,24 +230,8 @@ impl Mannequin {
         m.validate()?;
         let lm = m.landmarks();
         let sc = m.scale();
-        let hip_sec = girth_section(m.hip, 0.80, -0.012 * sc);
-        let sections: Vec<(Real, [Real; 3])> = vec![
-            (lm.crotch, [0.9 * hip_sec[0], 0.9 * hip_sec[1], hip_sec[2]]),
-            (lm.hip, hip_sec),
-            (lm.waist, girth_section(m.waist, 0.74, 0.0)),
-            (lm.bust, girth_section(m.bust, 0.76, 0.012 * sc)),
-            (lm.armpit, girth_section(0.93 * m.bust, 0.68, 0.0)),
-            (
-                lm.shoulder - 0.035 * sc,
-                [0.5 * m.shoulder_width - 0.005 * sc, 0.072 * sc, -0.01 * sc],
-            ),
-            (
-                lm.shoulder,
-                [0.42 * m.shoulder_width, 0.066 * sc, -0.012 * sc],
-            ),
-            (lm.neck, [0.058 * sc, 0.06 * sc, -0.012 * sc]),
-            (lm.chin, [0.055 * sc, 0.058 * sc, -0.01 * sc]),
-        ];
+        let sections = m.torso_keys(RING);
+        let hip_sec = sections[1].1;
         let head_c = lm.chin + 0.42 * (lm.top - lm.chin);
         let section = |y: Real| -> [Real; 3] {
             let neck = profile(&sections, y);
@@ -334,8 +283,10 @@ impl Mannequin {
         joints[SPINE[2]] = Vec3::new(0.0, lm.bust + 0.02 * sc, -0.01 * sc);
         joints[SPINE[3]] = Vec3::new(0.0, lm.neck - 0.01 * sc, -0.012 * sc);
         joints[SPINE[4]] = Vec3::new(0.0, lm.chin + 0.01 * sc, -0.005 * sc);
-        let torso_chain: Vec<(usize, Real)> =
-            std::iter::once(PELVIS).chain(SPINE).map(|j| (j, joints[j].y)).collect();
+        let torso_chain: Vec<(usize, Real)> = std::iter::once(PELVIS)
+            .chain(SPINE)
+            .map(|j| (j, joints[j].y))
+            .collect();
 
         // Torso vertices (interior hole vertices are dropped when compacting).
         let hole_centre_sample = [0usize, RING / 2];
@@ -355,11 +306,7 @@ impl Mannequin {
                     let legs = 0.5 * smoothstep((lm.hip - y) / hip_band);
                     if legs > 0.0 {
                         let left = (0.5 + p.x / (0.12 * sc)).clamp(0.0, 1.0);
-                        w = blend(
-                            &w,
-                            &vec![(LEG[0][0], left), (LEG[1][0], 1.0 - left)],
-                            legs,
-                        );
+                        w = blend(&w, &vec![(LEG[0][0], left), (LEG[1][0], 1.0 - left)], legs);
                     }
                     b.vertex(p, w)
                 })
@@ -367,7 +314,9 @@ impl Mannequin {
             rings.push(ring);
         }
         for r in 0..ys.len() - 1 {
-            let skip = |k: usize| r >= hole_lo && r < hole_hi && (in_hole_cols(k, 0) || in_hole_cols(k, 1));
+            let skip = |k: usize| {
+                r >= hole_lo && r < hole_hi && (in_hole_cols(k, 0) || in_hole_cols(k, 1))
+            };
             let (lo, hi) = (rings[r].clone(), rings[r + 1].clone());
             b.strip(&lo, &hi, skip);
         }
@@ -394,7 +343,11 @@ impl Mannequin {
             let [_, ua, fa, hand] = ARM[side];
             let len = m.arm_length;
             let hand_len = 0.105 * m.height;
-            joints[ARM[side][0]] = Vec3::new(if side == 0 { 0.025 } else { -0.025 } * sc, lm.shoulder - 0.03 * sc, -0.01 * sc);
+            joints[ARM[side][0]] = Vec3::new(
+                if side == 0 { 0.025 } else { -0.025 } * sc,
+                lm.shoulder - 0.03 * sc,
+                -0.01 * sc,
+            );
             joints[ua] = hc - d * 0.035 * sc;
             joints[fa] = hc + d * (0.54 * len);
             joints[hand] = hc + d * len;
@@ -422,7 +375,11 @@ impl Mannequin {
             let hole_w: Vec<Infl> = hole.iter().map(|&v| b.infl[v as usize].clone()).collect();
             let ang = loop_angles(&hole_pts, hc, e1, e2);
             let mut ts = fill(0.025 * sc, len, 0.02 * sc);
-            ts.extend(fill(len, len + 0.9 * hand_len, 0.018 * sc).into_iter().skip(1));
+            ts.extend(
+                fill(len, len + 0.9 * hand_len, 0.018 * sc)
+                    .into_iter()
+                    .skip(1),
+            );
             let mut prev = hole.clone();
             for &t in &ts {
                 let u = smoothstep(t / (0.09 * sc));
@@ -455,7 +412,11 @@ impl Mannequin {
         let seam: Vec<u32> = (1..=SEAM)
             .map(|i| {
                 let p = pf + (pb - pf) * (i as Real / (SEAM + 1) as Real);
-                let w = blend(&chain_weights(&torso_chain, p.y), &vec![(LEG[0][0], 0.5), (LEG[1][0], 0.5)], 0.5);
+                let w = blend(
+                    &chain_weights(&torso_chain, p.y),
+                    &vec![(LEG[0][0], 0.5), (LEG[1][0], 0.5)],
+                    0.5,
+                );
                 b.vertex(p, w)
             })
             .collect();
@@ -471,7 +432,11 @@ impl Mannequin {
                 lp.extend(seam.iter().rev());
             }
             let [thigh, shin, foot, toe] = LEG[side];
-            let xl = |y: Real| s * (xl_top + (0.85 * xl_top - xl_top) * smoothstep((lm.crotch - y) / (lm.crotch - lm.ankle)));
+            let xl = |y: Real| {
+                s * (xl_top
+                    + (0.85 * xl_top - xl_top)
+                        * smoothstep((lm.crotch - y) / (lm.crotch - lm.ankle)))
+            };
             joints[thigh] = Vec3::new(xl(lm.crotch), lm.crotch + 0.06 * sc, 0.0);
             joints[shin] = Vec3::new(xl(lm.knee), lm.knee, 0.0);
             joints[foot] = Vec3::new(xl(lm.ankle), lm.ankle, 0.0);

@@ -20,7 +20,11 @@ fn closed_and_oriented(m: &Mannequin) {
     let mut half: HashSet<(u32, u32)> = HashSet::new();
     for t in &tris {
         for e in 0..3 {
-            assert!(half.insert((t[e], t[(e + 1) % 3])), "edge {:?} twice in one direction", (t[e], t[(e + 1) % 3]));
+            assert!(
+                half.insert((t[e], t[(e + 1) % 3])),
+                "edge {:?} twice in one direction",
+                (t[e], t[(e + 1) % 3])
+            );
         }
     }
     let x = &m.mesh.positions;
@@ -40,29 +44,73 @@ fn default_mannequin_is_a_closed_manifold_of_the_right_size() {
     closed_and_oriented(&m);
     assert_eq!(m.skeleton.names.len(), JOINT_NAMES.len());
     assert!(JOINT_NAMES.len() >= 20);
-    let lo = m.mesh.positions.iter().fold(Vec3::repeat(Real::MAX), |a, p| a.inf(p));
-    let hi = m.mesh.positions.iter().fold(Vec3::repeat(Real::MIN), |a, p| a.sup(p));
-    assert!(lo.y.abs() < 1e-9 && (hi.y - 1.65).abs() < 1e-9, "{lo:?} {hi:?}");
+    let lo = m
+        .mesh
+        .positions
+        .iter()
+        .fold(Vec3::repeat(Real::MAX), |a, p| a.inf(p));
+    let hi = m
+        .mesh
+        .positions
+        .iter()
+        .fold(Vec3::repeat(Real::MIN), |a, p| a.sup(p));
+    assert!(
+        lo.y.abs() < 1e-9 && (hi.y - 1.65).abs() < 1e-9,
+        "{lo:?} {hi:?}"
+    );
 }
 
 #[test]
 fn girths_by_slicing_match_the_measurements() {
     for m in [
         Measurements::default(),
-        Measurements { height: 1.80, bust: 1.02, waist: 0.86, hip: 1.00, shoulder_width: 0.44, arm_length: 0.62, inseam: 0.84 },
-        Measurements { height: 1.55, bust: 0.80, waist: 0.60, hip: 0.90, shoulder_width: 0.34, arm_length: 0.50, inseam: 0.70 },
+        Measurements {
+            height: 1.80,
+            bust: 1.02,
+            waist: 0.86,
+            hip: 1.00,
+            shoulder_width: 0.44,
+            arm_length: 0.62,
+            inseam: 0.84,
+        },
+        Measurements {
+            height: 1.55,
+            bust: 0.80,
+            waist: 0.60,
+            hip: 0.90,
+            shoulder_width: 0.34,
+            arm_length: 0.50,
+            inseam: 0.70,
+        },
     ] {
         let body = Mannequin::new(&m).unwrap();
         closed_and_oriented(&body);
         let (tris, _) = body.mesh.triangulate();
         let lm = body.landmarks;
-        for (name, h, want) in [("hip", lm.hip, m.hip), ("waist", lm.waist, m.waist), ("bust", lm.bust, m.bust)] {
+        for (name, h, want) in [
+            ("hip", lm.hip, m.hip),
+            ("waist", lm.waist, m.waist),
+            ("bust", lm.bust, m.bust),
+        ] {
             let got = girth_at(&body.mesh.positions, &tris, h, 0.0, 0.0).unwrap();
-            assert!((got / want - 1.0).abs() < 0.01, "{name}: sliced {got} vs {want}");
+            assert!(
+                (got / want - 1.0).abs() < 0.01,
+                "{name}: sliced {got} vs {want}"
+            );
         }
         // Arm length: shoulder point (arm root) to wrist joint.
-        let ua = body.skeleton.names.iter().position(|s| s == "upperarm_l").unwrap();
-        let hand = body.skeleton.names.iter().position(|s| s == "hand_l").unwrap();
+        let ua = body
+            .skeleton
+            .names
+            .iter()
+            .position(|s| s == "upperarm_l")
+            .unwrap();
+        let hand = body
+            .skeleton
+            .names
+            .iter()
+            .position(|s| s == "hand_l")
+            .unwrap();
         let arm = (body.joint_rest[hand] - body.joint_rest[ua]).norm();
         assert!((arm / m.arm_length - 1.0).abs() < 0.1, "arm {arm}");
     }
@@ -84,7 +132,13 @@ fn weights_are_four_normalised_influences() {
 fn rest_pose_skins_to_the_rest_mesh_and_a_bent_pose_stays_finite() {
     let m = Mannequin::new(&Measurements::default()).unwrap();
     let (tris, _) = m.mesh.triangulate();
-    let mut body = SkinnedBody::new(m.mesh.positions.clone(), tris, m.skeleton.clone(), m.joint_rest.clone(), m.skin.clone());
+    let mut body = SkinnedBody::new(
+        m.mesh.positions.clone(),
+        tris,
+        m.skeleton.clone(),
+        m.joint_rest.clone(),
+        m.skin.clone(),
+    );
     let mut frame = Default::default();
     body.pose(&Pose::rest(22), &mut frame);
     let tryon_core::frames::BodyFrame { positions, .. } = &frame;
@@ -100,6 +154,9 @@ fn rest_pose_skins_to_the_rest_mesh_and_a_bent_pose_stays_finite() {
     assert!(frame.positions.iter().all(tryon_core::math::is_finite));
     assert_eq!(frame.velocities.len(), frame.positions.len());
     // The posed mesh is still a valid body for the referee.
-    let posed = tryon_core::mesh::PolyMesh { positions: frame.positions.clone(), faces: m.mesh.faces.clone() };
+    let posed = tryon_core::mesh::PolyMesh {
+        positions: frame.positions.clone(),
+        faces: m.mesh.faces.clone(),
+    };
     assert!(ExactCollider::new(&posed, 0.0).is_ok());
 }

@@ -6,7 +6,6 @@ use tryon_core::math::{Mat3, Real, Vec3};
 use tryon_core::pose::{Pose, Skeleton};
 use tryon_core::stages::BodyModel;
 
-
 /// Skinning weights: per vertex four (joint, weight) pairs; unused slots have weight 0; weights sum to 1.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SkinWeights {

@@ -6,7 +6,11 @@
 
 use crate::body::{BodyError, BodyMesh};
 use tryon_core::frames::{BodyFrame, Contact};
-use tryon_core::math::{Real, Vec3};
+use tryon_core::math::{Real, Vec3, closest_point_on_triangle};
+
+/// How far from its nearest body vertex a point can be and still be tested for being inside a
+/// concave crease (m).
+const CREASE_REACH: Real = 0.05;
 use tryon_core::mesh::PolyMesh;
 use tryon_core::stages::Collider;
 
@@ -86,6 +90,36 @@ impl NearestVertexCollider {
         (best.0 != u32::MAX).then_some(best)
     }
 
+    /// The crease test: P1's test misses points inside a concave crease (shoulder against neck,
+    /// arm against torso), where a point can be behind some faces of the fan and in front of
+    /// others. Such a point is inside when it is behind the closest point of the fan, judged by the
+    /// pseudo-normal there (the face normal, or the mean of the faces sharing the closest edge or
+    /// vertex). Returns the face and the point's height over the closest point along that normal.
+    fn inside_crease(&self, p: &Vec3, v: u32, skin: Real) -> Option<(u32, Real, Vec3)> {
+        if (p - self.body.positions[v as usize]).norm_squared() > CREASE_REACH * CREASE_REACH {
+            return None;
+        }
+        let (f, q, bary) = self.body.closest_on_fan(p, v);
+        if f == u32::MAX {
+            return None;
+        }
+        let d2 = (p - q).norm_squared();
+        let mut n = self.body.face_normals[f as usize];
+        if bary.iter().any(|&b| b < 1e-9) {
+            n = Vec3::zeros();
+            for &g in self.body.vertex_faces.row(v as usize) {
+                let [a, b, c] = self.body.corners(g as usize);
+                let (qg, _) = closest_point_on_triangle(p, &a, &b, &c);
+                if (p - qg).norm_squared() <= d2 * (1.0 + 1e-9) + 1e-24 {
+                    n += self.body.face_normals[g as usize];
+                }
+            }
+            n = n.try_normalize(1e-12)?;
+        }
+        let h = (p - q).dot(&n);
+        (h < skin).then_some((f, h, n))
+    }
+
     /// Barycentric coordinates of `q` (on or near the plane of triangle `f`), clamped into the triangle.
     fn bary(&self, f: u32, q: &Vec3) -> [Real; 3] {
         let [a, b, c] = self.body.corners(f as usize);
@@ -125,10 +159,14 @@ impl Collider for NearestVertexCollider {
             if !self.near_bounds(p) {
                 continue;
             }
-            let Some((f, height)) = self.inside(p, self.nearest[i]) else {
-                continue;
+            let v = self.nearest[i];
+            let (f, height, n) = match self.inside(p, v) {
+                Some((f, h)) => (f, h, self.body.face_normals[f as usize]),
+                None => match self.inside_crease(p, v, self.thickness) {
+                    Some(hit) => hit,
+                    None => continue,
+                },
             };
-            let n = self.body.face_normals[f as usize];
             *p += n * (self.thickness - height);
             let bary = self.bary(f, p);
             contacts.push(Contact {
@@ -152,7 +190,8 @@ impl Collider for NearestVertexCollider {
             .vertex_faces
             .row(v as usize)
             .iter()
-            .all(|&f| (p - x).dot(&self.body.face_normals[f as usize]) < 0.0);
+            .all(|&f| (p - x).dot(&self.body.face_normals[f as usize]) < 0.0)
+            || self.inside_crease(p, v, 0.0).is_some();
         Some(if behind_all { -d } else { d })
     }
 }

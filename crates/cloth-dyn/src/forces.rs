@@ -74,12 +74,27 @@ fn external_and_accelerate(
     force: &[Vec3],
     a: &mut [Vec3],
 ) {
+    // Only the terms a scene enables are evaluated: a disabled term costs no pass over the particles.
     let g = params.gravity;
     let (drag, wind, vd) = (params.air_drag, params.wind, params.velocity_damping);
-    for i in 0..a.len() {
-        let m = model.mass[i];
-        let f = force[i] + g * m - (v[i] - wind) * (drag * model.area[i]) - v[i] * (vd * m);
-        a[i] = f * model.inv_mass[i];
+    if g == Vec3::zeros() {
+        for i in 0..a.len() {
+            a[i] = force[i] * model.inv_mass[i];
+        }
+    } else {
+        for i in 0..a.len() {
+            a[i] = (force[i] + g * model.mass[i]) * model.inv_mass[i];
+        }
+    }
+    if drag != 0.0 {
+        for i in 0..a.len() {
+            a[i] -= (v[i] - wind) * (drag * model.area[i] * model.inv_mass[i]);
+        }
+    }
+    if vd != 0.0 {
+        for i in 0..a.len() {
+            a[i] -= v[i] * (vd * model.mass[i] * model.inv_mass[i]);
+        }
     }
 }
 

@@ -127,6 +127,87 @@ impl Measurements {
     pub fn scale(&self) -> Real {
         self.height / 1.65
     }
+
+    /// The torso's cross-sections at its control heights, ascending from the crotch to the chin:
+    /// (height, [half-width, half-depth, z of the centre]). The sections are ellipses; at the hip,
+    /// waist and bust heights a `samples`-gon of the ellipse has exactly the measured girth.
+    pub fn torso_keys(&self, samples: usize) -> Vec<(Real, [Real; 3])> {
+        let lm = self.landmarks();
+        let sc = self.scale();
+        let hip = girth_section(self.hip, 0.80, -0.012 * sc, samples);
+        vec![
+            (lm.crotch, [0.9 * hip[0], 0.9 * hip[1], hip[2]]),
+            (lm.hip, hip),
+            (lm.waist, girth_section(self.waist, 0.74, 0.0, samples)),
+            (lm.bust, girth_section(self.bust, 0.76, 0.012 * sc, samples)),
+            (
+                lm.armpit,
+                girth_section(0.93 * self.bust, 0.68, 0.0, samples),
+            ),
+            (
+                lm.shoulder - 0.035 * sc,
+                [
+                    0.5 * self.shoulder_width - 0.005 * sc,
+                    0.072 * sc,
+                    -0.01 * sc,
+                ],
+            ),
+            (
+                lm.shoulder,
+                [0.42 * self.shoulder_width, 0.066 * sc, -0.012 * sc],
+            ),
+            // The top of the shoulders is nearly flat beside the neck (a strap rests there).
+            (lm.neck - 0.01 * sc, [0.11 * sc, 0.062 * sc, -0.012 * sc]),
+            (lm.neck, [0.058 * sc, 0.06 * sc, -0.012 * sc]),
+            (lm.chin, [0.055 * sc, 0.058 * sc, -0.01 * sc]),
+        ]
+    }
+}
+
+/// Cubic ease 3t^2 - 2t^3 on t clamped to [0, 1].
+pub fn smoothstep(t: Real) -> Real {
+    let t = t.clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// Interpolates a piecewise profile of (key, values) with smoothstep between neighbouring keys
+/// (keys ascending; constant beyond the ends): control values are met exactly.
+pub fn profile<const N: usize>(keys: &[(Real, [Real; N])], y: Real) -> [Real; N] {
+    if keys.is_empty() {
+        return [0.0; N];
+    }
+    if y <= keys[0].0 {
+        return keys[0].1;
+    }
+    for w in keys.windows(2) {
+        let ((y0, v0), (y1, v1)) = (w[0], w[1]);
+        if y <= y1 {
+            let s = smoothstep((y - y0) / (y1 - y0));
+            return std::array::from_fn(|k| v0[k] + (v1[k] - v0[k]) * s);
+        }
+    }
+    keys[keys.len() - 1].1
+}
+
+/// Perimeter of the `samples`-gon sampling an ellipse of half-axes (1, aspect) at equal angles.
+pub fn unit_ellipse_perimeter(aspect: Real, samples: usize) -> Real {
+    let pt = |k: usize| {
+        let t = std::f64::consts::TAU * k as Real / samples as Real;
+        (t.cos(), aspect * t.sin())
+    };
+    (0..samples)
+        .map(|k| {
+            let (a, b) = (pt(k), pt(k + 1));
+            ((a.0 - b.0).powi(2) + (a.1 - b.1).powi(2)).sqrt()
+        })
+        .sum()
+}
+
+/// [half-width, half-depth, z-centre] of an elliptic section of girth `g` (as a `samples`-gon)
+/// and depth/width ratio `aspect`.
+pub fn girth_section(g: Real, aspect: Real, c: Real, samples: usize) -> [Real; 3] {
+    let a = g / unit_ellipse_perimeter(aspect, samples);
+    [a, a * aspect, c]
 }
 
 #[cfg(test)]
@@ -139,8 +220,8 @@ mod tests {
         m.validate().unwrap();
         let l = m.landmarks();
         let ys = [
-            l.ankle, l.knee, l.crotch, l.hip, l.waist, l.bust, l.armpit, l.shoulder, l.neck, l.chin,
-            l.top,
+            l.ankle, l.knee, l.crotch, l.hip, l.waist, l.bust, l.armpit, l.shoulder, l.neck,
+            l.chin, l.top,
         ];
         assert!(ys.windows(2).all(|w| w[0] < w[1]), "{ys:?}");
     }

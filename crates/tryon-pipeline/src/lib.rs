@@ -1,10 +1,19 @@
-//! tryon-pipeline: the only crate that wires stages together. For now: the coarse loop (body
-//! following, collision, cloth dynamics), accuracy metrics judged by the exact referee, and the drape
-//! scene fixture used by tests and benchmarks.
+//! tryon-pipeline: the only crate that wires stages together: the scene file ([`Scene`], TOML),
+//! assembly of only the stages a scene enables ([`Pipeline`]), the timed frame loop with accuracy
+//! metrics judged by the exact referee ([`RunOutput`], [`Stats`]), the coarse loop, and the drape
+//! fixture used by tests and benchmarks.
 
+pub mod assemble;
 pub mod coarse;
 pub mod drape;
+pub mod export;
 pub mod metrics;
+pub mod run;
+pub mod scene;
 
+pub use assemble::{AssembleError, BodyDriver, Pipeline, garment_params};
 pub use coarse::CoarseLoop;
 pub use drape::{DrapeConfig, DrapeError, DrapeReport, DrapeScene, FrameTrace};
+pub use export::ExportError;
+pub use run::{FrameRecord, RunOutput, Stats};
+pub use scene::{DEMO_SCENE, Scene, SceneError};

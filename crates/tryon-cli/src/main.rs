@@ -1,0 +1,162 @@
+//! The `tryon` command line: `tryon demo`, `tryon run SCENE.toml`, `tryon check SCENE.toml`.
+//! Exit codes: 0 success, 2 bad input (the message names the file, line, key or value), 1 an
+//! internal error (an output that could not be written, a failed export).
+
+use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use tryon_pipeline::{Pipeline, Scene};
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "tryon",
+    version,
+    about = "Real-time cloth simulation and virtual try-on"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Run the embedded default: the mannequin in a dress, walking (no files needed).
+    Demo {
+        /// Output directory (scene.glb, preview.png, stats.json).
+        #[arg(long, default_value = "out/demo")]
+        out: PathBuf,
+        /// Simulate only this many frames.
+        #[arg(long)]
+        frames: Option<usize>,
+        /// No progress bar or summary.
+        #[arg(long, short)]
+        quiet: bool,
+    },
+    /// Run a scene file.
+    Run {
+        scene: PathBuf,
+        /// Output directory; default out/<scene name>.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        #[arg(long)]
+        frames: Option<usize>,
+        #[arg(long, short)]
+        quiet: bool,
+    },
+    /// Validate a scene file (parse, check values, assemble) without running it.
+    Check { scene: PathBuf },
+}
+
+/// A failure and the exit code it maps to.
+enum Failure {
+    BadInput(String),
+    Internal(String),
+}
+
+fn load(path: &Path) -> Result<Scene, Failure> {
+    Scene::load(path).map_err(|e| Failure::BadInput(e.to_string()))
+}
+
+fn assemble(scene: Scene, file: &str) -> Result<Pipeline, Failure> {
+    Pipeline::new(scene).map_err(|e| Failure::BadInput(format!("{file}: {e}")))
+}
+
+fn run(mut p: Pipeline, out: &Path, frames: Option<usize>, quiet: bool) -> Result<(), Failure> {
+    let total = frames.unwrap_or(p.frames);
+    let bar = ProgressBar::new(total as u64);
+    if quiet || !std::io::stderr().is_terminal() {
+        bar.set_draw_target(ProgressDrawTarget::hidden());
+    }
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{prefix} [{bar:40}] {pos}/{len} frames, {elapsed} elapsed, eta {eta}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar())
+        .progress_chars("=> "),
+    );
+    bar.set_prefix(p.scene.scene.name.clone());
+    let result = p.run(frames, |k, _| bar.set_position(k as u64));
+    bar.finish_and_clear();
+    let files = p
+        .export(&result, out)
+        .map_err(|e| Failure::Internal(e.to_string()))?;
+    if !quiet {
+        let s = &result.stats;
+        let m = &s.metrics;
+        println!(
+            "{}: {} frames at {} fps in {:.1} s ({} coarse particles, {} body vertices, {} substep {:.5} s, collider {})",
+            s.scene,
+            s.frames,
+            s.fps,
+            s.loop_s,
+            s.counts.coarse_vertices,
+            s.counts.body_vertices,
+            s.integrator,
+            s.substep_s,
+            s.collider
+        );
+        println!(
+            "penetration max {:.2} mm, p99 {:.2} mm; stretch max {:.3}, mean {:.3}; retries {}, non-finite {}",
+            m.max_penetration_m * 1e3,
+            m.p99_penetration_m * 1e3,
+            m.max_stretch,
+            m.mean_stretch,
+            m.substep_retries,
+            m.non_finite_events
+        );
+        for (name, t) in &s.stages {
+            println!(
+                "  {name:<16} {:8.3} ms mean {:8.3} ms max",
+                t.ms_mean, t.ms_max
+            );
+        }
+        for f in files {
+            println!("wrote {}", f.display());
+        }
+    }
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Demo { out, frames, quiet } => {
+            assemble(Scene::demo(), "<embedded demo>").and_then(|p| run(p, &out, frames, quiet))
+        }
+        Command::Run {
+            scene,
+            out,
+            frames,
+            quiet,
+        } => load(&scene).and_then(|s| {
+            let out = out.unwrap_or_else(|| PathBuf::from("out").join(&s.scene.name));
+            assemble(s, &scene.display().to_string()).and_then(|p| run(p, &out, frames, quiet))
+        }),
+        Command::Check { scene } => load(&scene).and_then(|s| {
+            let p = assemble(s, &scene.display().to_string())?;
+            println!(
+                "{}: ok: scene `{}`, {} frames at {} fps, {} garment particles, stages: {}",
+                scene.display(),
+                p.scene.scene.name,
+                p.frames,
+                p.fps,
+                p.garment.positions.len(),
+                p.stages.join(", ")
+            );
+            Ok(())
+        }),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(Failure::BadInput(m)) => {
+            eprintln!("error: {m}");
+            ExitCode::from(2)
+        }
+        Err(Failure::Internal(m)) => {
+            eprintln!("internal error: {m}");
+            ExitCode::from(1)
+        }
+    }
+}

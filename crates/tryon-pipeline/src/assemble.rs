@@ -1,0 +1,327 @@
+//! Assembling a scene into a pipeline: only the stages and force terms the scene enables are built.
+//! A disabled effect leaves no stage in the list and no term in the solver.
+
+use crate::coarse::CoarseLoop;
+use crate::scene::{BodyKind, CollisionMethod, GarmentKind, IntegratorName, MotionKind, Scene};
+use body_collide::{
+    BodyError, BodyFollower, BodyMesh, ExactCollider, FollowParams, Mannequin,
+    NearestVertexCollider, SkinnedBody,
+};
+use cloth_dyn::{BuildClothError, ClothModel, ClothParams, ClothSim, IntegratorKind};
+use garment_fit::{DressParams, PatternError, SkirtParams};
+use mocap_retarget::{ArmRaise, ClipError, Walk, WalkParams};
+use thiserror::Error;
+use tryon_core::math::{Real, Vec3};
+use tryon_core::measure::{MeasureError, Measurements};
+use tryon_core::mesh::{PolyMesh, grid_xz};
+use tryon_core::shapes::icosphere;
+use tryon_core::stages::{Collider, MotionSource, NoCollider, StillMotion};
+
+/// Why a scene could not be assembled (after it parsed and passed its range checks).
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum AssembleError {
+    #[error("body: {0}")]
+    Measurements(#[from] MeasureError),
+    #[error("body mesh: {0}")]
+    Body(#[from] BodyError),
+    #[error("garment: {0}")]
+    Pattern(#[from] PatternError),
+    #[error("cloth: {0}")]
+    Cloth(#[from] BuildClothError),
+    #[error("cloth: {0}")]
+    Params(#[from] cloth_dyn::params::ParamError),
+    #[error("motion: {0}")]
+    Motion(#[from] ClipError),
+}
+
+/// The body as the pipeline drives it.
+pub enum BodyDriver {
+    /// A fixed mesh (the sphere).
+    Fixed,
+    /// A skinned body and the motion that poses it.
+    Skinned {
+        body: Box<SkinnedBody>,
+        motion: Box<dyn MotionSource>,
+    },
+}
+
+impl std::fmt::Debug for BodyDriver {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            BodyDriver::Fixed => f.write_str("Fixed"),
+            BodyDriver::Skinned { .. } => f.write_str("Skinned"),
+        }
+    }
+}
+
+/// A scene ready to run.
+#[derive(Debug)]
+pub struct Pipeline {
+    pub scene: Scene,
+    /// Names of the per-frame stages that will run, in order.
+    pub stages: Vec<&'static str>,
+    /// The body in its rest pose.
+    pub body_mesh: PolyMesh,
+    pub driver: BodyDriver,
+    /// The garment as placed on the rest pose (after clearing the body).
+    pub garment: PolyMesh,
+    /// Garment vertices moved out of the body when placing it.
+    pub placed_moved: usize,
+    pub coarse: CoarseLoop,
+    /// The exact referee judging penetration (always the body's true surface, no skin).
+    pub referee: ExactCollider,
+    /// The mannequin, when the body is one (for exports: skeleton and weights).
+    pub mannequin: Option<Mannequin>,
+    pub frames: usize,
+    pub fps: Real,
+}
+
+/// Default material for a garment whose edges average `h` metres: the springs scale with particle
+/// mass (see `drape_params`), inextensibility comes from the strain limit.
+pub fn garment_params(h: Real, density: Real) -> ClothParams {
+    let base = ClothParams::default();
+    let m = density * h * h;
+    let k = 2500.0 * m;
+    ClothParams {
+        density,
+        k_stretch: k,
+        k_compress: 0.1 * k,
+        k_shear: 0.1 * k,
+        k_bend: 0.02 * k,
+        spring_damping: 0.02 * m * 120.0,
+        max_strain: Some(1.03),
+        strain_iterations: 6,
+        strain_relaxation: 1.8,
+        min_bend_ratio: Some(0.97),
+        stretch_guard: Some(1.1),
+        ..base
+    }
+}
+
+fn measurements(s: &Scene) -> Measurements {
+    let d = Measurements::default();
+    let b = &s.body;
+    Measurements {
+        height: b.height.unwrap_or(d.height),
+        bust: b.bust.unwrap_or(d.bust),
+        waist: b.waist.unwrap_or(d.waist),
+        hip: b.hip.unwrap_or(d.hip),
+        shoulder_width: b.shoulder_width.unwrap_or(d.shoulder_width),
+        arm_length: b.arm_length.unwrap_or(d.arm_length),
+        inseam: b.inseam.unwrap_or(d.inseam),
+    }
+}
+
+fn mean_edge(mesh: &PolyMesh) -> Real {
+    let (tris, _) = mesh.triangulate();
+    let mut sum = 0.0;
+    for t in &tris {
+        for e in 0..3 {
+            sum += (mesh.positions[t[e] as usize] - mesh.positions[t[(e + 1) % 3] as usize]).norm();
+        }
+    }
+    sum / (3 * tris.len()).max(1) as Real
+}
+
+impl Pipeline {
+    /// Builds every enabled stage of `scene`.
+    pub fn new(scene: Scene) -> Result<Pipeline, AssembleError> {
+        let fx = scene.effects.clone();
+        let thickness = scene.cloth.thickness.unwrap_or(0.004);
+        let mut stages: Vec<&'static str> = Vec::new();
+        // Body and motion.
+        let (body_mesh, driver, mannequin, clip_len) = match scene.body.kind {
+            BodyKind::Sphere => {
+                let r = scene.body.radius.unwrap_or(0.3);
+                let mesh = icosphere(r, scene.body.subdivisions.unwrap_or(4), Vec3::zeros());
+                (
+                    mesh,
+                    BodyDriver::Fixed,
+                    None,
+                    scene.motion.duration.unwrap_or(2.0),
+                )
+            }
+            BodyKind::Mannequin => {
+                let m = measurements(&scene);
+                let man = Mannequin::new(&m)?;
+                let (tris, _) = man.mesh.triangulate();
+                let body = SkinnedBody::new(
+                    man.mesh.positions.clone(),
+                    tris,
+                    man.skeleton.clone(),
+                    man.joint_rest.clone(),
+                    man.skin.clone(),
+                );
+                let mo = &scene.motion;
+                let motion: Box<dyn MotionSource> = match mo.kind {
+                    MotionKind::Still => Box::new(StillMotion {
+                        joints: man.skeleton.names.len(),
+                        duration: mo.duration.unwrap_or(2.0),
+                    }),
+                    MotionKind::Walk => {
+                        let d = WalkParams::default();
+                        let lm = man.landmarks;
+                        Box::new(Walk::new(
+                            &man.skeleton,
+                            WalkParams {
+                                period: mo.period.unwrap_or(d.period),
+                                hip_deg: mo.hip_deg.unwrap_or(d.hip_deg),
+                                knee_deg: mo.knee_deg.unwrap_or(d.knee_deg),
+                                arm_deg: mo.arm_deg.unwrap_or(d.arm_deg),
+                                duration: mo.duration.unwrap_or(d.duration),
+                                leg_length: lm.crotch + 0.06 * m.scale(),
+                                ..d
+                            },
+                        )?)
+                    }
+                    MotionKind::ArmRaise => {
+                        Box::new(ArmRaise::new(&man.skeleton, mo.raise_deg.unwrap_or(100.0))?)
+                    }
+                };
+                let len = motion.duration();
+                let moving = mo.kind != MotionKind::Still;
+                let mesh = man.mesh.clone();
+                let driver = if moving {
+                    BodyDriver::Skinned {
+                        body: Box::new(body),
+                        motion,
+                    }
+                } else {
+                    BodyDriver::Fixed
+                };
+                (mesh, driver, Some(man), len)
+            }
+        };
+        let moving = matches!(driver, BodyDriver::Skinned { .. });
+        if moving {
+            stages.extend(["motion", "skinning"]);
+        }
+        let mut referee = ExactCollider::new(&body_mesh, thickness)?;
+
+        // Garment, placed clear of the body.
+        let m = measurements(&scene);
+        let g = &scene.garment;
+        let mut garment = match g.kind {
+            GarmentKind::Dress => {
+                let d = DressParams::default();
+                let e = g.ease.clone().unwrap_or(d.ease.to_vec());
+                garment_fit::dress(
+                    &m,
+                    &DressParams {
+                        ease: [e[0], e[1], e[2]],
+                        flare: g.flare.unwrap_or(d.flare),
+                        hem_above_knee: g.hem_above_knee.unwrap_or(d.hem_above_knee),
+                        columns: g.columns.unwrap_or(d.columns),
+                        row_spacing: g.row_spacing.unwrap_or(d.row_spacing),
+                    },
+                )?
+                .mesh
+            }
+            GarmentKind::Skirt => {
+                let d = SkirtParams::default();
+                let e = g.ease.clone().unwrap_or(d.ease.to_vec());
+                garment_fit::skirt(
+                    &m,
+                    &SkirtParams {
+                        ease: [e[0], e[1]],
+                        flare: g.flare.unwrap_or(d.flare),
+                        hem_above_knee: g.hem_above_knee.unwrap_or(d.hem_above_knee),
+                        columns: g.columns.unwrap_or(d.columns),
+                        row_spacing: g.row_spacing.unwrap_or(d.row_spacing),
+                    },
+                )?
+                .mesh
+            }
+            GarmentKind::Square => {
+                let n = g.particles.unwrap_or(32).max(2) - 1;
+                let size = g.size.unwrap_or(1.0);
+                grid_xz(n, n, size, size, g.drop_height.unwrap_or(0.5))
+            }
+        };
+        let placed_moved = if fx.body_collision == CollisionMethod::None {
+            0
+        } else {
+            garment_fit::place_outside(&mut garment, &mut referee)
+        };
+        // The referee judges the true surface.
+        let referee = ExactCollider::new(&body_mesh, 0.0)?;
+
+        // Cloth: material from the garment's resolution, then the scene's overrides and effects.
+        let c = &scene.cloth;
+        let mut p = garment_params(mean_edge(&garment), c.density.unwrap_or(0.2));
+        let set = |dst: &mut Real, v: Option<Real>| {
+            if let Some(v) = v {
+                *dst = v;
+            }
+        };
+        set(&mut p.k_stretch, c.k_stretch);
+        set(&mut p.k_compress, c.k_compress);
+        set(&mut p.k_shear, c.k_shear);
+        set(&mut p.k_bend, c.k_bend);
+        set(&mut p.spring_damping, c.spring_damping);
+        set(&mut p.max_substep, c.substep);
+        if let Some(s) = c.max_strain {
+            p.max_strain = (s > 0.0).then_some(s);
+        }
+        if let Some(n) = c.strain_iterations {
+            p.strain_iterations = n;
+        }
+        p.gravity = if fx.gravity {
+            tryon_core::math::GRAVITY
+        } else {
+            Vec3::zeros()
+        };
+        p.air_drag = fx.air_drag;
+        p.wind = Vec3::from(fx.wind);
+        p.friction = fx.friction;
+        p.velocity_damping = fx.velocity_damping;
+        p.validate()?;
+        let kind = match c.integrator.unwrap_or(IntegratorName::Rk4) {
+            IntegratorName::Rk4 => IntegratorKind::Rk4,
+            IntegratorName::SymplecticEuler => IntegratorKind::SymplecticEuler,
+        };
+        let model = ClothModel::build(&garment, &p, vec![])?;
+        let sim = ClothSim::new(model, p, kind);
+        let collider: Box<dyn Collider> = match fx.body_collision {
+            CollisionMethod::NearestVertex => {
+                Box::new(NearestVertexCollider::new(&body_mesh, thickness)?)
+            }
+            CollisionMethod::Exact => Box::new(ExactCollider::new(&body_mesh, thickness)?),
+            CollisionMethod::None => Box::new(NoCollider),
+        };
+        let follower = (fx.follow_body && moving)
+            .then(|| {
+                BodyMesh::new(&body_mesh).map(|b| BodyFollower::new(b, FollowParams::default()))
+            })
+            .transpose()?;
+        if follower.is_some() {
+            stages.push("follow_body");
+        }
+        if moving && fx.body_collision != CollisionMethod::None {
+            stages.push("collider_update");
+        }
+        stages.push("cloth");
+        stages.push("referee");
+        let coarse = CoarseLoop::new(sim, collider, follower);
+        let fps = scene.scene.fps;
+        let duration = scene
+            .scene
+            .duration
+            .unwrap_or(scene.scene.settle + clip_len);
+        let frames = (duration * fps).round().max(1.0) as usize;
+        Ok(Pipeline {
+            scene,
+            stages,
+            body_mesh,
+            driver,
+            garment,
+            placed_moved,
+            coarse,
+            referee,
+            mannequin,
+            frames,
+            fps,
+        })
+    }
+}

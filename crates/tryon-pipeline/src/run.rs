@@ -1,0 +1,338 @@
+//! The frame loop: pose the body, carry the cloth with it, update the collider, step the cloth, and
+//! judge the result with the exact referee. Each stage is timed; the result holds every frame's
+//! garment and pose for the exporters, and the statistics written to stats.json.
+
+use crate::assemble::{BodyDriver, Pipeline};
+use crate::metrics::{penetration, stretch};
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::time::Instant;
+use tryon_core::frames::{BodyFrame, StepReport};
+use tryon_core::math::{Mat3, Real, Vec3};
+use tryon_core::pose::Pose;
+use tryon_core::stages::{BodyModel, ClothSolver, Collider};
+
+/// One output frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameRecord {
+    pub time: Real,
+    pub garment: Vec<Vec3>,
+    /// The body's pose (a skinned body only).
+    pub pose: Option<Pose>,
+}
+
+/// Time spent in one stage per frame (ms).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct StageTime {
+    pub ms_mean: Real,
+    pub ms_max: Real,
+    #[serde(skip)]
+    sum: Real,
+    #[serde(skip)]
+    count: usize,
+}
+
+/// Counts of the scene's meshes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Counts {
+    pub coarse_vertices: usize,
+    pub coarse_faces: usize,
+    pub springs: usize,
+    pub body_vertices: usize,
+    pub body_triangles: usize,
+}
+
+/// Accuracy and robustness over the run, judged by the exact referee.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Metrics {
+    /// Deepest garment vertex inside the body over all frames (m).
+    pub max_penetration_m: Real,
+    /// The worst frame's 99th-percentile depth (m).
+    pub p99_penetration_m: Real,
+    /// Largest structural edge length / rest length over all frames.
+    pub max_stretch: Real,
+    /// Mean over frames of the mean structural stretch.
+    pub mean_stretch: Real,
+    pub non_finite_events: u32,
+    pub substep_retries: u32,
+    pub rollbacks: u32,
+    /// Garment vertices moved out of the body when placing it on the rest pose.
+    pub placement_moved: usize,
+}
+
+/// Per-frame figures (for plots and regressions).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct FrameStats {
+    pub frame: usize,
+    pub max_penetration_m: Real,
+    pub p99_penetration_m: Real,
+    pub max_stretch: Real,
+    pub contacts: u32,
+    pub retries: u32,
+}
+
+/// Everything stats.json holds.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Stats {
+    pub scene: String,
+    pub frames: usize,
+    pub fps: Real,
+    pub integrator: String,
+    pub substep_s: Real,
+    pub collider: String,
+    pub counts: Counts,
+    /// Only the stages that ran.
+    pub stages: BTreeMap<String, StageTime>,
+    pub metrics: Metrics,
+    /// Wall time of the whole frame loop, s.
+    pub loop_s: Real,
+    pub per_frame: Vec<FrameStats>,
+}
+
+/// What a run produced.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RunOutput {
+    /// Frame 0 is the garment as placed; then one record per simulated frame.
+    pub frames: Vec<FrameRecord>,
+    pub garment_triangles: Vec<[u32; 3]>,
+    pub body_triangles: Vec<[u32; 3]>,
+    pub stats: Stats,
+}
+
+/// The root joint's rotation and position in a pose.
+fn root_transform(root: usize, rest: &Vec3, pose: &Pose) -> (Mat3, Vec3) {
+    let r = pose
+        .local_rotations
+        .get(root)
+        .map_or(Mat3::identity(), |q| *q.to_rotation_matrix().matrix());
+    (r, rest + pose.root_translation)
+}
+
+/// The rigid motion of the root from one frame to the next: x -> rot (x - from) + to.
+struct RootDelta {
+    rot: Mat3,
+    from: Vec3,
+    to: Vec3,
+}
+
+impl RootDelta {
+    fn new(prev: (Mat3, Vec3), now: (Mat3, Vec3)) -> Self {
+        RootDelta {
+            rot: now.0 * prev.0.transpose(),
+            from: prev.1,
+            to: now.1,
+        }
+    }
+
+    fn apply(&self, x: &Vec3) -> Vec3 {
+        self.rot * (x - self.from) + self.to
+    }
+}
+
+struct Timers(BTreeMap<&'static str, StageTime>);
+
+impl Timers {
+    fn time<T>(&mut self, name: &'static str, f: impl FnOnce() -> T) -> T {
+        let t0 = Instant::now();
+        let r = f();
+        let ms = t0.elapsed().as_secs_f64() * 1e3;
+        let e = self.0.entry(name).or_default();
+        e.sum += ms;
+        e.count += 1;
+        e.ms_max = e.ms_max.max(ms);
+        r
+    }
+}
+
+impl Pipeline {
+    /// Body vertex positions for a recorded frame (the rest mesh for a fixed body).
+    pub fn body_at(&self, record: &FrameRecord) -> Vec<Vec3> {
+        match (&self.driver, &record.pose) {
+            (BodyDriver::Skinned { body, .. }, Some(p)) => {
+                let mut out = Vec::new();
+                body.skin_into(p, &mut out);
+                out
+            }
+            _ => self.body_mesh.positions.clone(),
+        }
+    }
+
+    /// Runs `frames` output frames (the scene's count when `None`), calling `progress(done, total)`
+    /// after each.
+    pub fn run(
+        &mut self,
+        frames: Option<usize>,
+        mut progress: impl FnMut(usize, usize),
+    ) -> RunOutput {
+        let frames = frames.unwrap_or(self.frames);
+        let dt = 1.0 / self.fps;
+        let settle = self.scene.scene.settle;
+        let model = &self.coarse.sim.model;
+        let s = &model.springs;
+        let edges: Vec<[u32; 2]> = model.structural.clone().map(|k| [s.i[k], s.j[k]]).collect();
+        let rest: Vec<Real> = model.structural.clone().map(|k| s.rest[k]).collect();
+        let (garment_triangles, _) = self.garment.triangulate();
+        let (body_triangles, _) = self.body_mesh.triangulate();
+        let mut stats = Stats {
+            scene: self.scene.scene.name.clone(),
+            frames,
+            fps: self.fps,
+            integrator: self.coarse.sim.integrator_name().to_string(),
+            substep_s: self.coarse.sim.nominal_substep(),
+            collider: self.coarse.collider.name().to_string(),
+            counts: Counts {
+                coarse_vertices: self.garment.positions.len(),
+                coarse_faces: self.garment.faces.len(),
+                springs: s.len(),
+                body_vertices: self.body_mesh.positions.len(),
+                body_triangles: body_triangles.len(),
+            },
+            ..Stats::default()
+        };
+        stats.metrics.placement_moved = self.placed_moved;
+        let mut timers = Timers(BTreeMap::new());
+        let mut body_frame = BodyFrame {
+            time: 0.0,
+            positions: self.body_mesh.positions.clone(),
+            velocities: Vec::new(),
+        };
+        let mut pose = Pose::default();
+        let mut out_frames = Vec::with_capacity(frames + 1);
+        let skinned = matches!(self.driver, BodyDriver::Skinned { .. });
+        out_frames.push(FrameRecord {
+            time: 0.0,
+            garment: self.coarse.frame.positions.clone(),
+            pose: skinned.then(|| {
+                Pose::rest(
+                    self.mannequin
+                        .as_ref()
+                        .map_or(0, |m| m.skeleton.names.len()),
+                )
+            }),
+        });
+        if let BodyDriver::Skinned { body, motion } = &mut self.driver {
+            motion.sample(0.0, &mut pose);
+            body.pose(&pose, &mut body_frame);
+        }
+        let (root, root_rest) = match &self.mannequin {
+            Some(m) => {
+                let r = m
+                    .skeleton
+                    .parents
+                    .iter()
+                    .position(|p| p.is_none())
+                    .unwrap_or(0);
+                (r, m.joint_rest.get(r).copied().unwrap_or_default())
+            }
+            None => (0, Vec3::zeros()),
+        };
+        let mut prev_root = root_transform(root, &root_rest, &pose);
+        let mut prev_body: Vec<Vec3> = Vec::new();
+        let mut total = StepReport::default();
+        let mut stretch_sum = 0.0;
+        let loop_start = Instant::now();
+        for k in 1..=frames {
+            let t = k as Real * dt;
+            if let BodyDriver::Skinned { body, motion } = &mut self.driver {
+                prev_body.clone_from(&body_frame.positions);
+                timers.time("motion", || {
+                    motion.sample((t - settle).max(0.0), &mut pose);
+                    pose.time = t;
+                });
+                timers.time("skinning", || body.pose(&pose, &mut body_frame));
+            }
+            let c = &mut self.coarse;
+            if skinned {
+                if let Some(f) = &mut c.follower {
+                    timers.time("follow_body", || {
+                        // The whole cloth rides with the root (pelvis): the cloth is simulated in
+                        // the root's moving frame, so its velocities and the body's are relative to
+                        // it; then P1.3.4 carries the particles near the body with their faces.
+                        let now = root_transform(root, &root_rest, &pose);
+                        let delta = RootDelta::new(prev_root, now);
+                        for (x, v) in c
+                            .frame
+                            .positions
+                            .iter_mut()
+                            .zip(c.frame.velocities.iter_mut())
+                        {
+                            *x = delta.apply(x);
+                            *v = delta.rot * *v;
+                        }
+                        body_frame.velocities.clear();
+                        body_frame.velocities.extend(
+                            body_frame
+                                .positions
+                                .iter()
+                                .zip(&prev_body)
+                                .map(|(x, x0)| (x - delta.apply(x0)) * (1.0 / dt)),
+                        );
+                        prev_root = now;
+                        // A frame of the wrong size cannot happen here (the body is ours).
+                        let _ = f.apply(&body_frame, &mut c.frame.positions);
+                    });
+                }
+                if self.stages.contains(&"collider_update") {
+                    timers.time("collider_update", || c.collider.update(&body_frame));
+                }
+            }
+            let report = timers.time("cloth", || {
+                c.sim.step_frame(&mut c.frame, dt, c.collider.as_mut())
+            });
+            if let Some(f) = &mut c.follower {
+                timers.time("follow_body", || f.record(&c.frame.positions));
+            }
+            total.accumulate(&report);
+            let referee = &mut self.referee;
+            let (pen, (smax, smean)) = timers.time("referee", || {
+                if skinned {
+                    referee.update(&body_frame);
+                }
+                (
+                    penetration(referee, &c.frame.positions),
+                    stretch(&edges, &rest, &c.frame.positions),
+                )
+            });
+            let m = &mut stats.metrics;
+            m.max_penetration_m = m.max_penetration_m.max(pen.max);
+            m.p99_penetration_m = m.p99_penetration_m.max(pen.p99);
+            m.max_stretch = m.max_stretch.max(smax);
+            stretch_sum += smean;
+            stats.per_frame.push(FrameStats {
+                frame: k,
+                max_penetration_m: pen.max,
+                p99_penetration_m: pen.p99,
+                max_stretch: smax,
+                contacts: report.contacts,
+                retries: report.retries,
+            });
+            out_frames.push(FrameRecord {
+                time: t,
+                garment: c.frame.positions.clone(),
+                pose: skinned.then(|| pose.clone()),
+            });
+            progress(k, frames);
+        }
+        stats.loop_s = loop_start.elapsed().as_secs_f64();
+        stats.metrics.mean_stretch = stretch_sum / frames.max(1) as Real;
+        stats.metrics.non_finite_events = total.non_finite_events;
+        stats.metrics.substep_retries = total.retries;
+        stats.metrics.rollbacks = total.rollbacks;
+        // The follow stage is timed in two parts per frame; report it per frame.
+        for (name, mut t) in timers.0 {
+            let per_frame = if name == "follow_body" {
+                t.count.div_ceil(2)
+            } else {
+                t.count
+            };
+            t.ms_mean = t.sum / per_frame.max(1) as Real;
+            stats.stages.insert(name.to_string(), t);
+        }
+        RunOutput {
+            frames: out_frames,
+            garment_triangles,
+            body_triangles,
+            stats,
+        }
+    }
+}

@@ -1,0 +1,479 @@
+//! The scene file: TOML read through serde with unknown keys rejected, then every value checked
+//! against its allowed range. Errors name the file, the line, the key and what is allowed.
+
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+use thiserror::Error;
+use tryon_core::math::Real;
+
+/// Why a scene file was rejected.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum SceneError {
+    #[error("{}: cannot read: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{}:{line}:{column}: {message}", file.display())]
+    Syntax {
+        file: PathBuf,
+        line: usize,
+        column: usize,
+        message: String,
+    },
+    #[error("{}:{}: `{key}` = {value}: expected {expected}", file.display(), line.map_or("?".to_string(), |l| l.to_string()))]
+    Invalid {
+        file: PathBuf,
+        /// Line of the key, or of its table when the key was left out.
+        line: Option<usize>,
+        key: String,
+        value: String,
+        expected: String,
+    },
+}
+
+/// How fast and how long the scene runs.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct SceneSection {
+    pub name: String,
+    /// Output frames per second.
+    pub fps: Real,
+    /// Length of the run (s); when absent, the motion's length plus the settle time.
+    pub duration: Option<Real>,
+    /// Time the body holds its rest pose before the motion starts, letting the garment settle (s).
+    pub settle: Real,
+}
+
+impl Default for SceneSection {
+    fn default() -> Self {
+        SceneSection {
+            name: "scene".into(),
+            fps: 30.0,
+            duration: None,
+            settle: 0.3,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum BodyKind {
+    Mannequin,
+    Sphere,
+}
+
+/// The body: the parametric mannequin (measurements in metres) or a fixed sphere.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BodySection {
+    pub kind: BodyKind,
+    pub height: Option<Real>,
+    pub bust: Option<Real>,
+    pub waist: Option<Real>,
+    pub hip: Option<Real>,
+    pub shoulder_width: Option<Real>,
+    pub arm_length: Option<Real>,
+    pub inseam: Option<Real>,
+    /// Sphere radius (m).
+    pub radius: Option<Real>,
+    /// Sphere icosphere subdivisions.
+    pub subdivisions: Option<u32>,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum GarmentKind {
+    Dress,
+    Skirt,
+    /// A horizontal square sheet (the drape scene).
+    Square,
+}
+
+/// The garment: a pattern sized from the body's measurements, or a square sheet.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct GarmentSection {
+    pub kind: GarmentKind,
+    /// Ease at [bust, waist, hip] (dress) or [waist, hip] (skirt), m.
+    pub ease: Option<Vec<Real>>,
+    pub flare: Option<Real>,
+    pub hem_above_knee: Option<Real>,
+    pub columns: Option<usize>,
+    pub row_spacing: Option<Real>,
+    /// Square: particles per side, side length (m) and height above the origin (m).
+    pub particles: Option<usize>,
+    pub size: Option<Real>,
+    pub drop_height: Option<Real>,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum MotionKind {
+    Still,
+    Walk,
+    ArmRaise,
+}
+
+/// The motion driving the body.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MotionSection {
+    pub kind: MotionKind,
+    /// Clip length (s) for `still` and `walk`.
+    pub duration: Option<Real>,
+    pub period: Option<Real>,
+    pub hip_deg: Option<Real>,
+    pub knee_deg: Option<Real>,
+    pub arm_deg: Option<Real>,
+    pub raise_deg: Option<Real>,
+}
+
+impl Default for MotionSection {
+    fn default() -> Self {
+        MotionSection {
+            kind: MotionKind::Still,
+            duration: None,
+            period: None,
+            hip_deg: None,
+            knee_deg: None,
+            arm_deg: None,
+            raise_deg: None,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum IntegratorName {
+    Rk4,
+    SymplecticEuler,
+}
+
+/// Cloth material and solver settings; absent values take the garment's defaults.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct ClothSection {
+    pub integrator: Option<IntegratorName>,
+    /// Largest substep (s).
+    pub substep: Option<Real>,
+    /// kg/m^2.
+    pub density: Option<Real>,
+    /// Spring stiffness in N/m for the whole garment (scaled per spring by the solver's model).
+    pub k_stretch: Option<Real>,
+    pub k_compress: Option<Real>,
+    pub k_shear: Option<Real>,
+    pub k_bend: Option<Real>,
+    pub spring_damping: Option<Real>,
+    /// Provot's strain limit (1.0 < x); 0 turns it off.
+    pub max_strain: Option<Real>,
+    pub strain_iterations: Option<u32>,
+    /// Distance the cloth keeps from the body (m).
+    pub thickness: Option<Real>,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum CollisionMethod {
+    /// P1's nearest-vertex tracking.
+    NearestVertex,
+    /// Closest point on the whole mesh (parry).
+    Exact,
+    None,
+}
+
+/// Which effects act. A disabled effect is not assembled at all.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct EffectsSection {
+    pub gravity: bool,
+    /// Air drag coefficient (N s/m^3 per unit area); 0 turns drag off.
+    pub air_drag: Real,
+    /// Wind velocity (m/s); only acts through air drag.
+    pub wind: [Real; 3],
+    /// Coulomb friction coefficient at body contacts; 0 turns friction off.
+    pub friction: Real,
+    pub body_collision: CollisionMethod,
+    /// P1.3.4: carry the cloth with the moving body.
+    pub follow_body: bool,
+    /// Velocity damping (1/s); 0 turns it off.
+    pub velocity_damping: Real,
+}
+
+impl Default for EffectsSection {
+    fn default() -> Self {
+        EffectsSection {
+            gravity: true,
+            air_drag: 0.0,
+            wind: [0.0; 3],
+            friction: 0.5,
+            body_collision: CollisionMethod::NearestVertex,
+            follow_body: true,
+            velocity_damping: 0.2,
+        }
+    }
+}
+
+/// What to write.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct OutputSection {
+    pub glb: bool,
+    pub preview: bool,
+    pub stats: bool,
+    /// Frame drawn in the preview; the last frame when absent.
+    pub preview_frame: Option<usize>,
+    pub preview_width: u32,
+    pub preview_height: u32,
+}
+
+impl Default for OutputSection {
+    fn default() -> Self {
+        OutputSection {
+            glb: true,
+            preview: true,
+            stats: true,
+            preview_frame: None,
+            preview_width: 800,
+            preview_height: 1000,
+        }
+    }
+}
+
+/// A scene as written in its file.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    #[serde(default)]
+    pub scene: SceneSection,
+    pub body: BodySection,
+    pub garment: GarmentSection,
+    #[serde(default)]
+    pub motion: MotionSection,
+    #[serde(default)]
+    pub cloth: ClothSection,
+    #[serde(default)]
+    pub effects: EffectsSection,
+    #[serde(default)]
+    pub output: OutputSection,
+}
+
+/// The embedded default scene (`tryon demo`): the mannequin in the dress, walking.
+pub const DEMO_SCENE: &str = include_str!("../../../data/scenes/demo-dress-walk.toml");
+
+/// Line (1-based) and column of a byte offset.
+fn line_col(text: &str, offset: usize) -> (usize, usize) {
+    let before = &text[..offset.min(text.len())];
+    let line = before.matches('\n').count() + 1;
+    let col = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+    (line, col)
+}
+
+/// Line of `key` inside `[table]` (or of the table header when the key is absent).
+pub fn line_of(text: &str, table: &str, key: &str) -> Option<usize> {
+    let mut current = String::new();
+    let mut header = None;
+    for (i, raw) in text.lines().enumerate() {
+        let l = raw.trim();
+        if let Some(name) = l.strip_prefix('[').and_then(|s| s.strip_suffix(']')) {
+            current = name.trim().to_string();
+            if current == table {
+                header = Some(i + 1);
+            }
+            continue;
+        }
+        if current == table
+            && let Some((k, _)) = l.split_once('=')
+            && k.trim() == key
+        {
+            return Some(i + 1);
+        }
+    }
+    header
+}
+
+impl Scene {
+    /// Parses and checks a scene; `file` names it in errors.
+    pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
+        let scene: Scene = toml::from_str(text).map_err(|e| {
+            let (line, column) = e.span().map_or((0, 0), |s| line_col(text, s.start));
+            SceneError::Syntax {
+                file: file.to_path_buf(),
+                line,
+                column,
+                message: e.message().to_string(),
+            }
+        })?;
+        scene.check(text, file)?;
+        Ok(scene)
+    }
+
+    /// Reads, parses and checks a scene file.
+    pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Scene::parse(&text, path)
+    }
+
+    /// The embedded demo scene.
+    pub fn demo() -> Scene {
+        Scene::parse(DEMO_SCENE, Path::new("<embedded demo-dress-walk.toml>"))
+            .unwrap_or_else(|e| unreachable!("the embedded demo scene is checked by tests: {e}"))
+    }
+
+    fn check(&self, text: &str, file: &Path) -> Result<(), SceneError> {
+        let bad = |table: &str, key: &str, value: String, expected: &str| SceneError::Invalid {
+            file: file.to_path_buf(),
+            line: line_of(text, table, key),
+            key: format!("{table}.{key}"),
+            value,
+            expected: expected.to_string(),
+        };
+        let range = |table: &str, key: &str, v: Option<Real>, lo: Real, hi: Real| match v {
+            Some(x) if !(x.is_finite() && x >= lo && x <= hi) => Err(bad(
+                table,
+                key,
+                x.to_string(),
+                &format!("a number in {lo}..={hi}"),
+            )),
+            _ => Ok(()),
+        };
+        let s = &self.scene;
+        range("scene", "fps", Some(s.fps), 1.0, 1000.0)?;
+        range("scene", "duration", s.duration, 0.0, 3600.0)?;
+        range("scene", "settle", Some(s.settle), 0.0, 60.0)?;
+        let b = &self.body;
+        for (k, v, lo, hi) in [
+            ("height", b.height, 1.2, 2.2),
+            ("bust", b.bust, 0.5, 1.8),
+            ("waist", b.waist, 0.4, 1.6),
+            ("hip", b.hip, 0.5, 1.8),
+            ("shoulder_width", b.shoulder_width, 0.25, 0.6),
+            ("arm_length", b.arm_length, 0.35, 0.85),
+            ("inseam", b.inseam, 0.5, 1.1),
+            ("radius", b.radius, 0.01, 5.0),
+        ] {
+            range("body", k, v, lo, hi)?;
+        }
+        if let Some(n) = b.subdivisions
+            && n > 6
+        {
+            return Err(bad("body", "subdivisions", n.to_string(), "0..=6"));
+        }
+        let g = &self.garment;
+        if let Some(e) = &g.ease {
+            let want = if g.kind == GarmentKind::Skirt { 2 } else { 3 };
+            if e.len() != want || e.iter().any(|x| !(x.is_finite() && *x >= 0.0 && *x <= 0.5)) {
+                return Err(bad(
+                    "garment",
+                    "ease",
+                    format!("{e:?}"),
+                    &format!("{want} numbers in 0..=0.5 (m)"),
+                ));
+            }
+        }
+        range("garment", "flare", g.flare, 0.0, 2.0)?;
+        range("garment", "hem_above_knee", g.hem_above_knee, -0.3, 0.3)?;
+        range("garment", "row_spacing", g.row_spacing, 0.01, 0.2)?;
+        range("garment", "size", g.size, 0.05, 10.0)?;
+        range("garment", "drop_height", g.drop_height, -10.0, 10.0)?;
+        if let Some(c) = g.columns
+            && !(16..=96).contains(&c)
+        {
+            return Err(bad("garment", "columns", c.to_string(), "16..=96"));
+        }
+        if let Some(n) = g.particles
+            && !(2..=256).contains(&n)
+        {
+            return Err(bad(
+                "garment",
+                "particles",
+                n.to_string(),
+                "2..=256 per side",
+            ));
+        }
+        let m = &self.motion;
+        range("motion", "duration", m.duration, 0.0, 3600.0)?;
+        range("motion", "period", m.period, 0.3, 5.0)?;
+        range("motion", "hip_deg", m.hip_deg, 0.0, 60.0)?;
+        range("motion", "knee_deg", m.knee_deg, 0.0, 120.0)?;
+        range("motion", "arm_deg", m.arm_deg, 0.0, 60.0)?;
+        range("motion", "raise_deg", m.raise_deg, 0.0, 150.0)?;
+        let c = &self.cloth;
+        range("cloth", "substep", c.substep, 1e-5, 0.1)?;
+        range("cloth", "density", c.density, 1e-3, 10.0)?;
+        for (k, v) in [
+            ("k_stretch", c.k_stretch),
+            ("k_compress", c.k_compress),
+            ("k_shear", c.k_shear),
+            ("k_bend", c.k_bend),
+            ("spring_damping", c.spring_damping),
+        ] {
+            range("cloth", k, v, 0.0, 1e9)?;
+        }
+        if let Some(x) = c.max_strain
+            && !(x == 0.0 || (x.is_finite() && x > 1.0 && x <= 2.0))
+        {
+            return Err(bad(
+                "cloth",
+                "max_strain",
+                x.to_string(),
+                "0 (off) or a ratio in (1, 2]",
+            ));
+        }
+        if let Some(n) = c.strain_iterations
+            && n > 100
+        {
+            return Err(bad("cloth", "strain_iterations", n.to_string(), "0..=100"));
+        }
+        range("cloth", "thickness", c.thickness, 0.0, 0.05)?;
+        let e = &self.effects;
+        range("effects", "air_drag", Some(e.air_drag), 0.0, 100.0)?;
+        range("effects", "friction", Some(e.friction), 0.0, 5.0)?;
+        range(
+            "effects",
+            "velocity_damping",
+            Some(e.velocity_damping),
+            0.0,
+            100.0,
+        )?;
+        if e.wind.iter().any(|w| !(w.is_finite() && w.abs() <= 100.0)) {
+            return Err(bad(
+                "effects",
+                "wind",
+                format!("{:?}", e.wind),
+                "three numbers in -100..=100 (m/s)",
+            ));
+        }
+        let o = &self.output;
+        for (k, v) in [
+            ("preview_width", o.preview_width),
+            ("preview_height", o.preview_height),
+        ] {
+            if !(16..=8192).contains(&v) {
+                return Err(bad("output", k, v.to_string(), "16..=8192 pixels"));
+            }
+        }
+        // Combinations.
+        if self.body.kind == BodyKind::Sphere && self.motion.kind != MotionKind::Still {
+            return Err(bad(
+                "motion",
+                "kind",
+                format!("{:?}", self.motion.kind).to_lowercase(),
+                "\"still\" for a sphere body (it has no skeleton)",
+            ));
+        }
+        if self.body.kind == BodyKind::Sphere && g.kind != GarmentKind::Square {
+            return Err(bad(
+                "garment",
+                "kind",
+                format!("{:?}", g.kind).to_lowercase(),
+                "\"square\" on a sphere body (patterns need the mannequin's measurements)",
+            ));
+        }
+        Ok(())
+    }
+}
