@@ -1,6 +1,8 @@
 //! Integration tests over the public APIs: the drape scene end to end, the hard cases of the
 //! foundation (a jumping body, a cloth that starts inside the body, bad meshes), determinism.
 
+mod end_to_end;
+
 use body_collide::{
     BodyFollower, BodyMesh, ExactCollider, FollowParams, NearestVertexCollider, penetration_depths,
 };

@@ -52,7 +52,30 @@ fn cargo(args: &[&str]) -> Result<(), String> {
     }
 }
 
+/// Installs the Khronos glTF validator (npm, pinned by tools/gltf-validate/package-lock.json) that
+/// the end-to-end test runs on the written GLB, unless it is already there.
+fn install_gltf_validator() -> Result<(), String> {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tools/gltf-validate");
+    if dir.join("node_modules/gltf-validator").exists() {
+        return Ok(());
+    }
+    eprintln!("xtask: npm ci in {}", dir.display());
+    let status = Command::new("npm")
+        .args(["ci", "--no-audit", "--no-fund"])
+        .current_dir(&dir)
+        .status()
+        .map_err(|e| {
+            format!("cannot run npm (Node.js and npm are needed for the glTF validator): {e}")
+        })?;
+    if status.success() {
+        Ok(())
+    } else {
+        Err(format!("npm ci failed in {}", dir.display()))
+    }
+}
+
 fn ci() -> Result<(), String> {
+    install_gltf_validator()?;
     cargo(&["fmt", "--all", "--", "--check"])?;
     cargo(&[
         "clippy",

@@ -43,7 +43,9 @@ impl Default for Measurements {
 #[derive(Debug, Error, Clone, PartialEq)]
 #[non_exhaustive]
 pub enum MeasureError {
-    #[error("measurement `{name}` = {value} m is outside the supported range {min}..={max} m")]
+    #[error(
+        "measurement `{name}` = {value} m is outside the supported range {min:.3}..={max:.3} m for this height"
+    )]
     OutOfRange {
         name: &'static str,
         value: Real,

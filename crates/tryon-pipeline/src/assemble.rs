@@ -99,7 +99,8 @@ pub fn garment_params(h: Real, density: Real) -> ClothParams {
     }
 }
 
-fn measurements(s: &Scene) -> Measurements {
+/// The scene's body measurements, defaults filled in.
+pub fn measurements(s: &Scene) -> Measurements {
     let d = Measurements::default();
     let b = &s.body;
     Measurements {

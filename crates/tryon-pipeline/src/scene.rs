@@ -358,6 +358,32 @@ impl Scene {
         ] {
             range("body", k, v, lo, hi)?;
         }
+        if b.kind == BodyKind::Mannequin {
+            match crate::assemble::measurements(self).validate() {
+                Ok(()) => {}
+                Err(tryon_core::measure::MeasureError::OutOfRange {
+                    name,
+                    value,
+                    min,
+                    max,
+                }) => {
+                    return Err(bad(
+                        "body",
+                        name,
+                        value.to_string(),
+                        &format!("{min:.3}..={max:.3} m for this height"),
+                    ));
+                }
+                Err(e) => {
+                    return Err(bad(
+                        "body",
+                        "waist",
+                        b.waist.map_or("default".into(), |w| w.to_string()),
+                        &e.to_string(),
+                    ));
+                }
+            }
+        }
         if let Some(n) = b.subdivisions
             && n > 6
         {

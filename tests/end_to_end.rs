@@ -1,0 +1,222 @@
+//! End to end: the embedded demo runs, stays finite and out of the body, writes outputs that read
+//! back and pass the Khronos glTF validator; scene files are checked with errors that name the key
+//! and the line; the pipeline assembles only what a scene enables.
+
+use body_collide::{ExactCollider, penetration_depths};
+use std::path::{Path, PathBuf};
+use tryon_core::math::Real;
+use tryon_pipeline::{Pipeline, Scene, SceneError};
+
+fn scratch_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("tryon-test-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_default()
+}
+
+/// Runs the Khronos validator (tools/gltf-validate, installed by `.ci/run` and `cargo xtask ci`).
+fn khronos_errors(glb: &Path) -> String {
+    let tool = repo().join("tools/gltf-validate");
+    assert!(
+        tool.join("node_modules/gltf-validator").exists(),
+        "the glTF validator is not installed: run `npm ci` in {} (cargo xtask ci does)",
+        tool.display()
+    );
+    let out = std::process::Command::new("node")
+        .arg(tool.join("validate.js"))
+        .arg(glb)
+        .output()
+        .expect("node runs");
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    assert!(
+        out.status.success(),
+        "validator reported errors:\n{text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    text
+}
+
+#[test]
+fn demo_runs_a_few_frames_stays_close_and_writes_outputs_that_read_back() {
+    let mut p = Pipeline::new(Scene::demo()).unwrap();
+    assert!((300..=400).contains(&p.garment.positions.len()));
+    let run = p.run(Some(10), |_, _| {});
+    assert_eq!(run.frames.len(), 11);
+    for f in &run.frames {
+        assert!(f.garment.iter().all(|x| x.iter().all(|c| c.is_finite())));
+    }
+    let m = &run.stats.metrics;
+    assert_eq!(m.non_finite_events, 0);
+    assert!(
+        m.max_penetration_m <= 0.002,
+        "penetration {} m",
+        m.max_penetration_m
+    );
+    assert!(m.max_stretch <= 1.10, "stretch {}", m.max_stretch);
+    for stage in [
+        "motion",
+        "skinning",
+        "follow_body",
+        "collider_update",
+        "cloth",
+        "referee",
+    ] {
+        assert!(
+            run.stats.stages.contains_key(stage),
+            "stage {stage} missing"
+        );
+    }
+
+    let dir = scratch_dir("demo");
+    let files = p.export(&run, &dir).unwrap();
+    assert_eq!(files.len(), 3);
+    let stats: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("stats.json")).unwrap()).unwrap();
+    assert_eq!(stats["frames"], 10);
+    assert!(stats["counts"]["coarse_vertices"].as_u64().unwrap() >= 300);
+    assert!(stats["counts"]["body_vertices"].as_u64().unwrap() >= 5000);
+    for k in [
+        "max_penetration_m",
+        "p99_penetration_m",
+        "max_stretch",
+        "mean_stretch",
+        "non_finite_events",
+        "substep_retries",
+    ] {
+        assert!(stats["metrics"][k].is_number(), "metrics.{k}");
+    }
+    assert!(stats["stages"]["cloth"]["ms_mean"].is_number());
+    let glb = std::fs::read(dir.join("scene.glb")).unwrap();
+    let doc = gltf::Gltf::from_slice(&glb).unwrap();
+    assert_eq!(doc.skins().count(), 1);
+    assert_eq!(doc.skins().next().unwrap().joints().count(), 22);
+    let garment = doc.meshes().nth(1).unwrap();
+    assert_eq!(
+        garment.primitives().next().unwrap().morph_targets().count(),
+        10
+    );
+    let png = png::Decoder::new(std::io::Cursor::new(
+        std::fs::read(dir.join("preview.png")).unwrap(),
+    ));
+    let info = png.read_info().unwrap();
+    assert_eq!(info.info().width, 800);
+    let report = khronos_errors(&dir.join("scene.glb"));
+    assert!(report.contains(" 0 errors"), "{report}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn garments_are_placed_outside_the_rest_body() {
+    for garment in ["dress", "skirt"] {
+        let text = format!("[body]\nkind = \"mannequin\"\n[garment]\nkind = \"{garment}\"\n");
+        let p = Pipeline::new(Scene::parse(&text, Path::new("t.toml")).unwrap()).unwrap();
+        let referee = ExactCollider::new(&p.body_mesh, 0.0).unwrap();
+        let deepest = penetration_depths(&referee, &p.garment.positions)
+            .into_iter()
+            .fold(0.0, Real::max);
+        assert_eq!(deepest, 0.0, "{garment}: a vertex {deepest} m inside");
+    }
+}
+
+fn err(text: &str) -> String {
+    match Scene::parse(text, Path::new("bad.toml")) {
+        Ok(_) => panic!("accepted:\n{text}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn bad_scene_files_name_the_key_and_the_line() {
+    let base = "[body]\nkind = \"mannequin\"\n[garment]\nkind = \"dress\"\n";
+    let e = err(&format!(
+        "{base}[effects]\nfriction = 0.3\nfriciton = 0.5\n"
+    ));
+    assert!(e.contains("bad.toml:7") && e.contains("friciton"), "{e}");
+    let e = err(&format!("{base}[effects]\nfriction = -1.0\n"));
+    assert!(
+        e.contains("bad.toml:6") && e.contains("effects.friction") && e.contains("0..=5"),
+        "{e}"
+    );
+    let e = err(&format!("{base}[cloth]\nintegrator = \"rk5\"\n"));
+    assert!(
+        e.contains("bad.toml:6") && e.contains("rk5") && e.contains("rk4"),
+        "{e}"
+    );
+    let e = err("[body]\nkind = \"mannequin\"\n[garment]\n");
+    assert!(e.contains("kind"), "{e}");
+    let e = err(&format!("{base}[body]\n"));
+    assert!(e.contains("bad.toml:5"), "{e}");
+    let e = err(&format!("{base}[motion]\nkind = \"walk\"\nhip_deg = 90\n"));
+    assert!(
+        e.contains("bad.toml:7") && e.contains("motion.hip_deg"),
+        "{e}"
+    );
+    assert!(matches!(
+        Scene::load(Path::new("/nonexistent/x.toml")),
+        Err(SceneError::Io { .. })
+    ));
+}
+
+#[test]
+fn shipped_scenes_check_and_the_demo_is_the_shipped_file() {
+    let dir = repo().join("data/scenes");
+    let mut n = 0;
+    for e in std::fs::read_dir(&dir).unwrap() {
+        let path = e.unwrap().path();
+        if path.extension().is_some_and(|x| x == "toml") {
+            let s = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+            Pipeline::new(s).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            n += 1;
+        }
+    }
+    assert!(n >= 3);
+    let shipped = Scene::load(&dir.join("demo-dress-walk.toml")).unwrap();
+    assert_eq!(shipped, Scene::demo());
+}
+
+/// A sheet falling in free air, far from the sphere: friction can never act.
+fn falling_sheet(effects: &str) -> Scene {
+    let text = format!(
+        "[scene]\nfps = 60\nduration = 0.2\nsettle = 0\n[body]\nkind = \"sphere\"\n[garment]\nkind = \"square\"\nparticles = 8\ndrop_height = 3.0\n[motion]\nkind = \"still\"\n[effects]\nfollow_body = false\n{effects}"
+    );
+    Scene::parse(&text, Path::new("sheet.toml")).unwrap()
+}
+
+#[test]
+fn an_effect_that_cannot_act_changes_nothing_and_stages_are_only_the_enabled_ones() {
+    let mut with = Pipeline::new(falling_sheet("friction = 0.8\n")).unwrap();
+    let mut without = Pipeline::new(falling_sheet("friction = 0.0\n")).unwrap();
+    let (a, b) = (with.run(None, |_, _| {}), without.run(None, |_, _| {}));
+    assert_eq!(a.stats.per_frame.iter().map(|f| f.contacts).sum::<u32>(), 0);
+    for (fa, fb) in a.frames.iter().zip(&b.frames) {
+        for (x, y) in fa.garment.iter().zip(&fb.garment) {
+            assert_eq!(x.map(f64::to_bits), y.map(f64::to_bits));
+        }
+    }
+    // A fixed body: no motion, skinning, following or collider updates.
+    assert_eq!(with.stages, vec!["cloth", "referee"]);
+    let keys: Vec<&String> = a.stats.stages.keys().collect();
+    assert_eq!(keys, vec!["cloth", "referee"]);
+    // The walking mannequin without following and without collision.
+    let text = "[body]\nkind = \"mannequin\"\n[garment]\nkind = \"skirt\"\n[motion]\nkind = \"walk\"\n[effects]\nfollow_body = false\nbody_collision = \"none\"\n";
+    let p = Pipeline::new(Scene::parse(text, Path::new("t.toml")).unwrap()).unwrap();
+    assert_eq!(p.stages, vec!["motion", "skinning", "cloth", "referee"]);
+}
+
+#[test]
+fn the_demo_is_deterministic() {
+    let run = || {
+        Pipeline::new(Scene::demo())
+            .unwrap()
+            .run(Some(4), |_, _| {})
+            .frames
+    };
+    let (a, b) = (run(), run());
+    assert_eq!(a, b);
+}
