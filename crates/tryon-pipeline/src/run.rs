@@ -129,7 +129,20 @@ impl RootDelta {
     }
 }
 
-struct Timers(BTreeMap<&'static str, StageTime>);
+/// The frame loop's state between frames.
+#[derive(Clone, Debug)]
+pub struct LoopState {
+    pub body_frame: BodyFrame,
+    pub pose: Pose,
+    prev_body: Vec<Vec3>,
+    root: usize,
+    root_rest: Vec3,
+    prev_root: (Mat3, Vec3),
+}
+
+/// Wall time per stage.
+#[derive(Debug, Default)]
+pub struct Timers(BTreeMap<&'static str, StageTime>);
 
 impl Timers {
     fn time<T>(&mut self, name: &'static str, f: impl FnOnce() -> T) -> T {
@@ -157,6 +170,103 @@ impl Pipeline {
         }
     }
 
+    /// The loop's state at time 0: the body posed at the motion's start.
+    pub fn start(&mut self) -> LoopState {
+        let mut st = LoopState {
+            body_frame: BodyFrame {
+                time: 0.0,
+                positions: self.body_mesh.positions.clone(),
+                velocities: Vec::new(),
+            },
+            pose: Pose::default(),
+            prev_body: Vec::new(),
+            root: 0,
+            root_rest: Vec3::zeros(),
+            prev_root: (Mat3::identity(), Vec3::zeros()),
+        };
+        if let Some(m) = &self.mannequin {
+            st.root = m
+                .skeleton
+                .parents
+                .iter()
+                .position(|p| p.is_none())
+                .unwrap_or(0);
+            st.root_rest = m.joint_rest.get(st.root).copied().unwrap_or_default();
+        }
+        if let BodyDriver::Skinned { body, motion } = &mut self.driver {
+            motion.sample(0.0, &mut st.pose);
+            body.pose(&st.pose, &mut st.body_frame);
+        }
+        st.prev_root = root_transform(st.root, &st.root_rest, &st.pose);
+        st
+    }
+
+    /// One output frame ending at time `t`: motion, skinning, following, collider update and the
+    /// cloth step (each timed into `timers`). The referee is not run here.
+    pub fn advance(&mut self, st: &mut LoopState, t: Real, timers: &mut Timers) -> StepReport {
+        let dt = 1.0 / self.fps;
+        let settle = self.scene.scene.settle;
+        let skinned = matches!(self.driver, BodyDriver::Skinned { .. });
+        let LoopState {
+            body_frame,
+            pose,
+            prev_body,
+            root,
+            root_rest,
+            prev_root,
+        } = st;
+        if let BodyDriver::Skinned { body, motion } = &mut self.driver {
+            prev_body.clone_from(&body_frame.positions);
+            timers.time("motion", || {
+                motion.sample((t - settle).max(0.0), pose);
+                pose.time = t;
+            });
+            timers.time("skinning", || body.pose(pose, body_frame));
+        }
+        let c = &mut self.coarse;
+        if skinned {
+            if let Some(f) = &mut c.follower {
+                timers.time("follow_body", || {
+                    // The whole cloth rides with the root (pelvis): the cloth is simulated in the
+                    // root's moving frame, so its velocities and the body's are relative to it;
+                    // then P1.3.4 carries the particles near the body with their faces.
+                    let now = root_transform(*root, root_rest, pose);
+                    let delta = RootDelta::new(*prev_root, now);
+                    for (x, v) in c
+                        .frame
+                        .positions
+                        .iter_mut()
+                        .zip(c.frame.velocities.iter_mut())
+                    {
+                        *x = delta.apply(x);
+                        *v = delta.rot * *v;
+                    }
+                    body_frame.velocities.clear();
+                    body_frame.velocities.extend(
+                        body_frame
+                            .positions
+                            .iter()
+                            .zip(prev_body.iter())
+                            .map(|(x, x0)| (x - delta.apply(x0)) * (1.0 / dt)),
+                    );
+                    *prev_root = now;
+                    // A frame of the wrong size cannot happen here (the body is ours).
+                    let _ = f.apply(body_frame, &mut c.frame.positions);
+                });
+            }
+            if self.stages.contains(&"collider_update") {
+                timers.time("collider_update", || c.collider.update(body_frame));
+            }
+        }
+        let report = timers.time("cloth", || {
+            c.sim.step_frame(&mut c.frame, dt, c.collider.as_mut())
+        });
+        if let Some(f) = &mut c.follower {
+            timers.time("follow_body", || f.record(&c.frame.positions));
+        }
+        report
+    }
+
     /// Runs `frames` output frames (the scene's count when `None`), calling `progress(done, total)`
     /// after each.
     pub fn run(
@@ -166,7 +276,6 @@ impl Pipeline {
     ) -> RunOutput {
         let frames = frames.unwrap_or(self.frames);
         let dt = 1.0 / self.fps;
-        let settle = self.scene.scene.settle;
         let model = &self.coarse.sim.model;
         let s = &model.springs;
         let edges: Vec<[u32; 2]> = model.structural.clone().map(|k| [s.i[k], s.j[k]]).collect();
@@ -191,97 +300,21 @@ impl Pipeline {
         };
         stats.metrics.placement_moved = self.placed_moved;
         let mut timers = Timers(BTreeMap::new());
-        let mut body_frame = BodyFrame {
-            time: 0.0,
-            positions: self.body_mesh.positions.clone(),
-            velocities: Vec::new(),
-        };
-        let mut pose = Pose::default();
         let mut out_frames = Vec::with_capacity(frames + 1);
         let skinned = matches!(self.driver, BodyDriver::Skinned { .. });
+        let mut st = self.start();
         out_frames.push(FrameRecord {
             time: 0.0,
             garment: self.coarse.frame.positions.clone(),
-            pose: skinned.then(|| {
-                Pose::rest(
-                    self.mannequin
-                        .as_ref()
-                        .map_or(0, |m| m.skeleton.names.len()),
-                )
-            }),
+            pose: skinned.then(|| st.pose.clone()),
         });
-        if let BodyDriver::Skinned { body, motion } = &mut self.driver {
-            motion.sample(0.0, &mut pose);
-            body.pose(&pose, &mut body_frame);
-        }
-        let (root, root_rest) = match &self.mannequin {
-            Some(m) => {
-                let r = m
-                    .skeleton
-                    .parents
-                    .iter()
-                    .position(|p| p.is_none())
-                    .unwrap_or(0);
-                (r, m.joint_rest.get(r).copied().unwrap_or_default())
-            }
-            None => (0, Vec3::zeros()),
-        };
-        let mut prev_root = root_transform(root, &root_rest, &pose);
-        let mut prev_body: Vec<Vec3> = Vec::new();
         let mut total = StepReport::default();
         let mut stretch_sum = 0.0;
         let loop_start = Instant::now();
         for k in 1..=frames {
             let t = k as Real * dt;
-            if let BodyDriver::Skinned { body, motion } = &mut self.driver {
-                prev_body.clone_from(&body_frame.positions);
-                timers.time("motion", || {
-                    motion.sample((t - settle).max(0.0), &mut pose);
-                    pose.time = t;
-                });
-                timers.time("skinning", || body.pose(&pose, &mut body_frame));
-            }
-            let c = &mut self.coarse;
-            if skinned {
-                if let Some(f) = &mut c.follower {
-                    timers.time("follow_body", || {
-                        // The whole cloth rides with the root (pelvis): the cloth is simulated in
-                        // the root's moving frame, so its velocities and the body's are relative to
-                        // it; then P1.3.4 carries the particles near the body with their faces.
-                        let now = root_transform(root, &root_rest, &pose);
-                        let delta = RootDelta::new(prev_root, now);
-                        for (x, v) in c
-                            .frame
-                            .positions
-                            .iter_mut()
-                            .zip(c.frame.velocities.iter_mut())
-                        {
-                            *x = delta.apply(x);
-                            *v = delta.rot * *v;
-                        }
-                        body_frame.velocities.clear();
-                        body_frame.velocities.extend(
-                            body_frame
-                                .positions
-                                .iter()
-                                .zip(&prev_body)
-                                .map(|(x, x0)| (x - delta.apply(x0)) * (1.0 / dt)),
-                        );
-                        prev_root = now;
-                        // A frame of the wrong size cannot happen here (the body is ours).
-                        let _ = f.apply(&body_frame, &mut c.frame.positions);
-                    });
-                }
-                if self.stages.contains(&"collider_update") {
-                    timers.time("collider_update", || c.collider.update(&body_frame));
-                }
-            }
-            let report = timers.time("cloth", || {
-                c.sim.step_frame(&mut c.frame, dt, c.collider.as_mut())
-            });
-            if let Some(f) = &mut c.follower {
-                timers.time("follow_body", || f.record(&c.frame.positions));
-            }
+            let report = self.advance(&mut st, t, &mut timers);
+            let (c, body_frame, pose) = (&self.coarse, &st.body_frame, &st.pose);
             total.accumulate(&report);
             let referee = &mut self.referee;
             let (pen, (smax, smean)) = timers.time("referee", || {
