@@ -319,7 +319,7 @@ impl Pipeline {
             let referee = &mut self.referee;
             let (pen, (smax, smean)) = timers.time("referee", || {
                 if skinned {
-                    referee.update(&body_frame);
+                    referee.update(body_frame);
                 }
                 (
                     penetration(referee, &c.frame.positions),
