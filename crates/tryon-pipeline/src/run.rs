@@ -140,20 +140,30 @@ pub struct LoopState {
     prev_root: (Mat3, Vec3),
 }
 
-/// Wall time per stage.
+/// Wall time per stage. A stage timed in several parts within one frame (following: carry
+/// before the step, record after it) counts as one: parts add up until `end_frame`.
 #[derive(Debug, Default)]
-pub struct Timers(BTreeMap<&'static str, StageTime>);
+pub struct Timers {
+    totals: BTreeMap<&'static str, StageTime>,
+    frame: BTreeMap<&'static str, Real>,
+}
 
 impl Timers {
     fn time<T>(&mut self, name: &'static str, f: impl FnOnce() -> T) -> T {
         let t0 = Instant::now();
         let r = f();
-        let ms = t0.elapsed().as_secs_f64() * 1e3;
-        let e = self.0.entry(name).or_default();
-        e.sum += ms;
-        e.count += 1;
-        e.ms_max = e.ms_max.max(ms);
+        *self.frame.entry(name).or_default() += t0.elapsed().as_secs_f64() * 1e3;
         r
+    }
+
+    /// Closes the frame: each stage's time this frame goes into its mean and max.
+    pub fn end_frame(&mut self) {
+        for (name, ms) in std::mem::take(&mut self.frame) {
+            let e = self.totals.entry(name).or_default();
+            e.sum += ms;
+            e.count += 1;
+            e.ms_max = e.ms_max.max(ms);
+        }
     }
 }
 
@@ -299,7 +309,7 @@ impl Pipeline {
             ..Stats::default()
         };
         stats.metrics.placement_moved = self.placed_moved;
-        let mut timers = Timers(BTreeMap::new());
+        let mut timers = Timers::default();
         let mut out_frames = Vec::with_capacity(frames + 1);
         let skinned = matches!(self.driver, BodyDriver::Skinned { .. });
         let mut st = self.start();
@@ -344,6 +354,7 @@ impl Pipeline {
                 garment: c.frame.positions.clone(),
                 pose: skinned.then(|| pose.clone()),
             });
+            timers.end_frame();
             progress(k, frames);
         }
         stats.loop_s = loop_start.elapsed().as_secs_f64();
@@ -351,14 +362,9 @@ impl Pipeline {
         stats.metrics.non_finite_events = total.non_finite_events;
         stats.metrics.substep_retries = total.retries;
         stats.metrics.rollbacks = total.rollbacks;
-        // The follow stage is timed in two parts per frame; report it per frame.
-        for (name, mut t) in timers.0 {
-            let per_frame = if name == "follow_body" {
-                t.count.div_ceil(2)
-            } else {
-                t.count
-            };
-            t.ms_mean = t.sum / per_frame.max(1) as Real;
+        timers.end_frame();
+        for (name, mut t) in timers.totals {
+            t.ms_mean = t.sum / t.count.max(1) as Real;
             stats.stages.insert(name.to_string(), t);
         }
         RunOutput {
