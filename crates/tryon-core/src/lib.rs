@@ -2,6 +2,7 @@
 //! the plain-data frames passed between stages, and the object-safe stage traits with trivial
 //! implementations so each stage can be tested alone.
 
+pub mod assets;
 pub mod frames;
 pub mod math;
 pub mod measure;

@@ -1,14 +1,25 @@
 //! tryon-io: file formats, every output written atomically (temporary file, then rename): GLB export
 //! of the animated try-on ([`write_glb`]), shaded z-buffered PNG previews ([`render`], [`write_png`]),
-//! and JSON reports ([`write_json`]).
+//! and JSON reports ([`write_json`]); readers of real assets ([`read_obj`] keeping vertex order,
+//! MakeHuman [`read_mhskel`], [`read_mhw`], [`read_target`], [`read_binding`], and [`read_bvh`]).
 
 pub mod atomic;
+pub mod bvh;
+pub mod data;
 pub mod glb;
+pub mod makehuman;
+pub mod obj;
 pub mod preview;
+pub mod read;
 
 pub use atomic::write_atomic;
+pub use bvh::{guess_unit, parse_bvh, read_bvh};
+pub use data::{DATA_ENV, data_root, data_root_from};
 pub use glb::{AnimatedScene, BodyExport, GlbError, SkinnedExport, glb_bytes, write_glb};
+pub use makehuman::{read_binding, read_mhskel, read_mhw, read_target};
+pub use obj::{parse_obj, read_obj};
 pub use preview::{Camera, Image, PreviewError, PreviewMesh, render, write_png};
+pub use read::ReadError;
 
 /// Writes `value` as pretty JSON, atomically.
 pub fn write_json<T: serde::Serialize>(path: &std::path::Path, value: &T) -> std::io::Result<()> {
