@@ -7,6 +7,7 @@
 //!   inside tests): the referee that measures every other collider.
 //! - [`Mannequin`]: a parametric body from measurements (mesh, skeleton, skin weights), posed by
 //!   [`SkinnedBody`] (linear blend skinning); [`girth_at`] measures it by slicing.
+//! - [`MakeHumanBody`]: a MakeHuman base mesh skinned by its own weights, morphed toward measurements.
 //! - [`BodyFollower`]: P1.3.4, points keep their coordinates relative to their nearest body face when
 //!   the body moves.
 
@@ -14,6 +15,7 @@ pub mod body;
 pub mod exact;
 pub mod follow;
 pub mod girth;
+pub mod makehuman;
 pub mod mannequin;
 pub mod skin;
 pub mod tracker;
@@ -22,6 +24,7 @@ pub use body::{BodyError, BodyMesh};
 pub use exact::{ExactCollider, penetration_depths};
 pub use follow::{BodyFollower, FollowParams};
 pub use girth::girth_at;
+pub use makehuman::{Girths, MakeHumanBody, MakeHumanError};
 pub use mannequin::{JOINT_NAMES, Mannequin};
 pub use skin::{SkinWeights, SkinnedBody, joint_transforms};
 pub use tracker::NearestVertexCollider;

@@ -142,6 +142,21 @@ pub struct ClothBinding {
     pub delete_verts: Vec<u32>,
 }
 
+/// The assets a MakeHuman body is made of (lengths in metres, as tryon-io reads them).
+#[derive(Clone, Debug, Default)]
+pub struct MakeHumanAssets {
+    /// base.obj (all groups, file vertex order).
+    pub base: ObjMesh,
+    /// The default rig (its joints define the landmarks; its bones own the weights).
+    pub default_rig: MhSkeleton,
+    /// default_weights.mhw.
+    pub weights: MhWeights,
+    /// The rig to skin with (`None`: the default rig).
+    pub rig: Option<MhSkeleton>,
+    /// Measurement targets by file name, e.g. `measure-hips-circ-incr`.
+    pub targets: Vec<MorphTarget>,
+}
+
 /// A motion clip: a skeleton, and one pose per frame at a fixed frame time. Rotations are relative
 /// to the skeleton's rest offsets (the pose with every rotation zero).
 #[derive(Clone, Debug, Default, PartialEq)]

@@ -16,7 +16,7 @@ pub use atomic::write_atomic;
 pub use bvh::{guess_unit, parse_bvh, read_bvh};
 pub use data::{DATA_ENV, data_root, data_root_from};
 pub use glb::{AnimatedScene, BodyExport, GlbError, SkinnedExport, glb_bytes, write_glb};
-pub use makehuman::{read_binding, read_mhskel, read_mhw, read_target};
+pub use makehuman::{MhRig, load_makehuman, read_binding, read_mhskel, read_mhw, read_target};
 pub use obj::{parse_obj, read_obj};
 pub use preview::{Camera, Image, PreviewError, PreviewMesh, render, write_png};
 pub use read::ReadError;

@@ -6,7 +6,9 @@ use crate::read::{At, ReadError, json_error, read_text};
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::Path;
-use tryon_core::assets::{ClothBinding, MhBone, MhSkeleton, MhWeights, MorphTarget, ScaleRef};
+use tryon_core::assets::{
+    ClothBinding, MakeHumanAssets, MhBone, MhSkeleton, MhWeights, MorphTarget, ScaleRef,
+};
 use tryon_core::math::{Real, Vec3};
 
 /// Metres per MakeHuman unit (decimetres).
@@ -309,6 +311,52 @@ fn delete_line(at: &At, toks: &[&str], out: &mut Vec<u32>) -> Result<(), ReadErr
         }
     }
     Ok(())
+}
+
+/// Which rig skins a MakeHuman body.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MhRig {
+    /// The 163-bone default rig and its weights.
+    Default,
+    /// The 31-bone cmu_mb rig (CMU joint names), weighted through `weights_reference`.
+    CmuMb,
+}
+
+/// Loads base.obj (metres), the default rig and weights, the chosen rig and every measurement
+/// target from a MakeHuman data folder laid out as ../shared/data is.
+pub fn load_makehuman(data: &Path, rig: MhRig) -> Result<MakeHumanAssets, ReadError> {
+    let mh = data.join("makehuman");
+    let mut base = crate::read_obj(&mh.join("base.obj"))?;
+    for p in &mut base.positions {
+        *p *= MH_UNIT;
+    }
+    let rig = match rig {
+        MhRig::Default => None,
+        MhRig::CmuMb => Some(read_mhskel(
+            &data.join("makehuman-assets/rigs/cmu_mb.mhskel"),
+        )?),
+    };
+    let dir = mh.join("targets/measure");
+    let mut targets = Vec::new();
+    let entries = std::fs::read_dir(&dir).map_err(|source| ReadError::Io {
+        file: dir.clone(),
+        source,
+    })?;
+    let mut paths: Vec<_> = entries.filter_map(|e| e.ok().map(|e| e.path())).collect();
+    paths.sort();
+    for p in paths
+        .iter()
+        .filter(|p| p.extension().is_some_and(|e| e == "target"))
+    {
+        targets.push(read_target(p)?);
+    }
+    Ok(MakeHumanAssets {
+        base,
+        default_rig: read_mhskel(&mh.join("default.mhskel"))?,
+        weights: read_mhw(&mh.join("default_weights.mhw"))?,
+        rig,
+        targets,
+    })
 }
 
 #[cfg(test)]
