@@ -1,8 +1,11 @@
 //! garment-fit: garments sized from the same measurements as the body. Today: coarse patterns (a
 //! strapped one-piece dress of P1's size and a skirt) built as tubes whose sections are the body's
 //! torso sections offset by the ease, and [`place_outside`] which clears any vertex the body still
-//! holds through the `Collider` contract.
+//! holds through the `Collider` contract; MakeHuman .mhclo garments refitted onto a morphed body
+//! ([`fit_garment`]).
 
+pub mod mhclo;
 pub mod patterns;
 
+pub use mhclo::{FitError, binding_scales, fit_garment, fit_garment_outside, fit_positions};
 pub use patterns::{DressParams, Garment, PatternError, SkirtParams, dress, place_outside, skirt};
