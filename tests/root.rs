@@ -4,6 +4,7 @@
 mod end_to_end;
 mod makehuman_body;
 mod real_assets;
+mod retarget;
 
 use body_collide::{
     BodyFollower, BodyMesh, ExactCollider, FollowParams, NearestVertexCollider, penetration_depths,

@@ -1,0 +1,171 @@
+//! Retargeting on the shared clips: onto an identical skeleton it reproduces the source; CMU 10_04
+//! and 131_01 onto the MakeHuman body keep the (scaled) ankle paths and the upper body's bone
+//! directions, and stay finite.
+
+use crate::real_assets::data;
+use body_collide::{MakeHumanBody, joint_transforms};
+use mocap_retarget::{Placement, RetargetOptions, Rig, retarget};
+use tryon_core::assets::MotionClip;
+use tryon_core::math::{Real, Vec3};
+use tryon_core::pose::Pose;
+use tryon_io::{MhRig, load_makehuman, read_bvh};
+
+fn clip(name: &str) -> MotionClip {
+    read_bvh(&data().join("cmu-mocap-bvh").join(name), None).unwrap()
+}
+
+/// World joint positions of `pose` on a rig.
+fn positions(rig: &Rig, pose: &Pose) -> Vec<Vec3> {
+    joint_transforms(&rig.skeleton, &rig.rest, pose).1
+}
+
+fn index(rig: &Rig, name: &str) -> usize {
+    rig.skeleton.names.iter().position(|n| n == name).unwrap()
+}
+
+fn makehuman_rig() -> Rig {
+    let a = load_makehuman(&data(), MhRig::CmuMb).unwrap();
+    let b = MakeHumanBody::build(&a, None).unwrap();
+    let tips = b.joint_tails.iter().map(|t| Some(*t)).collect();
+    Rig::new(b.skeleton, b.joint_rest, tips)
+}
+
+/// Output at the clip's own rate, so that output frames fall on source frames.
+fn at_source_rate(c: &MotionClip) -> RetargetOptions {
+    RetargetOptions {
+        fps: c.fps(),
+        ease_in: 0.0,
+        ..RetargetOptions::default()
+    }
+}
+
+#[test]
+fn identical_skeleton_reproduces_the_source() {
+    let c = clip("10_04.bvh");
+    let rig = Rig::from_clip(&c);
+    let opt = RetargetOptions {
+        placement: Placement::Source,
+        skip_synthetic: false,
+        ..at_source_rate(&c)
+    };
+    let r = retarget(&c, &rig, &opt).unwrap();
+    assert_eq!(r.poses.len(), c.frames.len());
+    assert!((r.ratio - 1.0).abs() < 1e-12);
+    let mut worst: Real = 0.0;
+    for (p, s) in r.poses.iter().zip(&c.frames) {
+        let (a, b) = (positions(&rig, p), positions(&rig, s));
+        for (x, y) in a.iter().zip(&b) {
+            worst = worst.max((x - y).norm());
+        }
+    }
+    // Ten micrometres: the knee of a nearly straight leg comes from sqrt(l1^2 - a^2), which turns
+    // rounding into about 1e-6 m.
+    eprintln!("identical skeleton: joints within {worst:.2e} m");
+    assert!(worst < 1e-5, "joints differ by {worst} m");
+}
+
+/// Ankle errors (m) per frame: the target's FK ankle against the source ankle mapped by the
+/// reported scale and origins.
+fn ankle_errors(c: &MotionClip, rig: &Rig) -> (Vec<Real>, mocap_retarget::Retargeted) {
+    let r = retarget(c, rig, &at_source_rate(c)).unwrap();
+    let src = Rig::from_clip(c);
+    let pairs = [("LeftFoot", "LeftFoot"), ("RightFoot", "RightFoot")];
+    let names = if c.skeleton.names.iter().any(|n| n == "LeftAnkle") {
+        [("LeftAnkle", "LeftFoot"), ("RightAnkle", "RightFoot")]
+    } else {
+        pairs
+    };
+    let errs = r
+        .poses
+        .iter()
+        .zip(&r.source_times)
+        .map(|(p, t)| {
+            let frame = (t / c.frame_time).round() as usize;
+            let sp = positions(&src, &c.frames[frame]);
+            let tp = positions(rig, p);
+            names
+                .iter()
+                .map(|(s, t)| {
+                    let want = r.target_origin + (sp[index(&src, s)] - r.source_origin) * r.ratio;
+                    (tp[index(rig, t)] - want).norm()
+                })
+                .fold(0.0, Real::max)
+        })
+        .collect();
+    (errs, r)
+}
+
+#[test]
+fn cmu_walk_on_makehuman_keeps_scaled_ankles_and_upper_body() {
+    let rig = makehuman_rig();
+    let c = clip("10_04.bvh");
+    let (errs, r) = ankle_errors(&c, &rig);
+    assert_eq!(r.skipped_frames, 1, "10_04's frame 0 is a synthetic T-pose");
+    let within = errs.iter().filter(|e| **e <= 0.01).count() as Real / errs.len() as Real;
+    let mut sorted = errs.clone();
+    sorted.sort_by(Real::total_cmp);
+    eprintln!(
+        "10_04 -> MakeHuman: ratio {:.3}, {} frames, ankle error median {:.2e} m, max {:.4} m, {:.1}% within 1 cm, {} frames out of reach",
+        r.ratio,
+        errs.len(),
+        sorted[sorted.len() / 2],
+        sorted[sorted.len() - 1],
+        within * 100.0,
+        r.unreachable_frames
+    );
+    assert!(
+        within >= 0.99,
+        "{:.1}% of frames within 1 cm",
+        within * 100.0
+    );
+
+    // Upper body: every bone points where the source's points (after rest alignment).
+    let src = Rig::from_clip(&c);
+    let bones = [
+        ("LeftArm", "LeftForeArm"),
+        ("LeftForeArm", "LeftHand"),
+        ("RightArm", "RightForeArm"),
+        ("RightForeArm", "RightHand"),
+        ("LeftShoulder", "LeftArm"),
+        ("Spine", "Spine1"),
+        ("Neck1", "Head"),
+    ];
+    let mut worst: Real = 0.0;
+    for (p, t) in r.poses.iter().zip(&r.source_times) {
+        let sp = positions(&src, &c.frames[(t / c.frame_time).round() as usize]);
+        let tp = positions(&rig, p);
+        for (a, b) in bones {
+            let ds = sp[index(&src, b)] - sp[index(&src, a)];
+            let dt = tp[index(&rig, b)] - tp[index(&rig, a)];
+            worst = worst.max(ds.angle(&dt).to_degrees());
+        }
+    }
+    eprintln!("10_04 -> MakeHuman: upper-body bone directions within {worst:.2e} degrees");
+    assert!(worst < 1e-3, "a bone is {worst} degrees off");
+}
+
+#[test]
+fn both_clips_retarget_finite_at_scene_rate() {
+    let rig = makehuman_rig();
+    for name in ["10_04.bvh", "131_01.bvh"] {
+        let c = clip(name);
+        let r = retarget(&c, &rig, &RetargetOptions::default()).unwrap();
+        let expect = (r.source_times.len() as Real, c.duration() * 30.0);
+        assert!((expect.0 - expect.1).abs() <= 2.0, "{name}: {expect:?}");
+        assert!(r.poses.iter().all(|p| {
+            p.root_translation.iter().all(|x| x.is_finite())
+                && p.local_rotations
+                    .iter()
+                    .all(|q| q.coords.iter().all(|x| x.is_finite()))
+        }));
+        let (errs, _) = ankle_errors(&c, &rig);
+        let within = errs.iter().filter(|e| **e <= 0.01).count() as Real / errs.len() as Real;
+        eprintln!(
+            "{name} ({}): {} frames at 30 fps, ratio {:.3}, {:.1}% of 120-fps frames with ankles within 1 cm",
+            r.source_scheme,
+            r.poses.len(),
+            r.ratio,
+            within * 100.0
+        );
+    }
+}
