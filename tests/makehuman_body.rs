@@ -10,7 +10,7 @@ use tryon_io::{MhRig, load_makehuman};
 #[test]
 fn raw_body_mesh_rig_and_weights() {
     let a = load_makehuman(&data(), MhRig::CmuMb).unwrap();
-    let b = MakeHumanBody::build(&a, None).unwrap();
+    let b = MakeHumanBody::build(&a, 0.5, None).unwrap();
     assert_eq!(b.body_vertices, 13_380);
     assert_eq!(b.rest.len(), 19_158);
     assert_eq!(b.skeleton.names.len(), 31);
@@ -39,7 +39,7 @@ fn measurement_targets_morph_toward_requested_girths() {
             ..Measurements::default()
         },
     ] {
-        let b = MakeHumanBody::build(&a, Some(&m)).unwrap();
+        let b = MakeHumanBody::build(&a, 0.5, Some(&m)).unwrap();
         let g = b.girths;
         eprintln!("requested {m:?}\n got {g:?}, morphs {:?}", b.morphs);
         for (want, got) in [
@@ -66,7 +66,7 @@ fn measurement_targets_morph_toward_requested_girths() {
         bust: 1.25,
         ..Measurements::default()
     };
-    let e = MakeHumanBody::build(&a, Some(&too_big)).unwrap_err();
+    let e = MakeHumanBody::build(&a, 0.5, Some(&too_big)).unwrap_err();
     assert!(e.to_string().contains("can be morphed to"), "{e}");
 }
 
@@ -106,13 +106,18 @@ fn garments_fit_outside_raw_and_morphed_bodies() {
         hip: 1.02,
         ..Measurements::default()
     };
-    for m in [None, Some(Measurements::default()), Some(morphed)] {
-        let body = MakeHumanBody::build(&a, m.as_ref()).unwrap();
+    for (gender, m) in [
+        (0.5, None),
+        (0.0, None),
+        (0.0, Some(Measurements::default())),
+        (0.5, Some(morphed)),
+    ] {
+        let body = MakeHumanBody::build(&a, gender, m.as_ref()).unwrap();
         let bound = fitted_inside_share(&body, false);
         let fitted = fitted_inside_share(&body, true);
         for ((g, n, before), (_, _, after)) in bound.iter().zip(&fitted) {
             eprintln!(
-                "{g} on {m:?}: {n} vertices more than 5 mm inside: binding {:.2}%, fitted {:.2}%",
+                "{g} on gender {gender}, {m:?}: {n} vertices more than 5 mm inside: binding {:.2}%, fitted {:.2}%",
                 before * 100.0,
                 after * 100.0
             );

@@ -25,7 +25,7 @@ fn index(rig: &Rig, name: &str) -> usize {
 
 fn makehuman_rig() -> Rig {
     let a = load_makehuman(&data(), MhRig::CmuMb).unwrap();
-    let b = MakeHumanBody::build(&a, None).unwrap();
+    let b = MakeHumanBody::build(&a, 0.5, None).unwrap();
     let tips = b.joint_tails.iter().map(|t| Some(*t)).collect();
     Rig::new(b.skeleton, b.joint_rest, tips)
 }
@@ -65,13 +65,20 @@ fn identical_skeleton_reproduces_the_source() {
 }
 
 /// Ankle errors (m) per frame: the target's FK ankle against the source ankle mapped by the
-/// reported scale and origins.
+/// reported scale and origins, shifted across the floor by the target hip joint's offset from the
+/// mapped source hip joint.
 fn ankle_errors(c: &MotionClip, rig: &Rig) -> (Vec<Real>, mocap_retarget::Retargeted) {
     let r = retarget(c, rig, &at_source_rate(c)).unwrap();
     let src = Rig::from_clip(c);
-    let pairs = [("LeftFoot", "LeftFoot"), ("RightFoot", "RightFoot")];
+    let pairs = [
+        ("LeftFoot", "LeftFoot", "LeftUpLeg", "LeftUpLeg"),
+        ("RightFoot", "RightFoot", "RightUpLeg", "RightUpLeg"),
+    ];
     let names = if c.skeleton.names.iter().any(|n| n == "LeftAnkle") {
-        [("LeftAnkle", "LeftFoot"), ("RightAnkle", "RightFoot")]
+        [
+            ("LeftAnkle", "LeftFoot", "LeftHip", "LeftUpLeg"),
+            ("RightAnkle", "RightFoot", "RightHip", "RightUpLeg"),
+        ]
     } else {
         pairs
     };
@@ -85,8 +92,11 @@ fn ankle_errors(c: &MotionClip, rig: &Rig) -> (Vec<Real>, mocap_retarget::Retarg
             let tp = positions(rig, p);
             names
                 .iter()
-                .map(|(s, t)| {
-                    let want = r.target_origin + (sp[index(&src, s)] - r.source_origin) * r.ratio;
+                .map(|(s, t, sh, th)| {
+                    let map = |p: Vec3| r.target_origin + (p - r.source_origin) * r.ratio;
+                    let mut shift = tp[index(rig, th)] - map(sp[index(&src, sh)]);
+                    shift.y = 0.0;
+                    let want = map(sp[index(&src, s)]) + shift;
                     (tp[index(rig, t)] - want).norm()
                 })
                 .fold(0.0, Real::max)

@@ -41,6 +41,8 @@ pub enum MakeHumanError {
         requested: Real,
         reached: Real,
     },
+    #[error("gender {0} is outside 0 (female) ..= 1 (male)")]
+    Gender(Real),
     #[error(transparent)]
     Measure(#[from] tryon_core::measure::MeasureError),
 }
@@ -88,9 +90,12 @@ const GIRTH_TARGETS: [&str; 3] = [
 ];
 
 impl MakeHumanBody {
-    /// Builds the body; with `request`, morphs bust, waist and hip toward it and scales to its height.
+    /// Builds the body: `gender` 0 (female) ..= 1 (male), 0.5 the raw base, applied through the
+    /// young-adult macro targets (ethnicities weighted equally, as MakeHuman's default); then, with
+    /// `request`, morphs bust, waist and hip toward it and scales to its height.
     pub fn build(
         a: &MakeHumanAssets,
+        gender: Real,
         request: Option<&Measurements>,
     ) -> Result<Self, MakeHumanError> {
         let faces = a.base.group_faces("body");
@@ -126,6 +131,25 @@ impl MakeHumanBody {
             check_joint(b, &a.base.positions)?;
         }
         let mut rest = a.base.positions.clone();
+        if !(0.0..=1.0).contains(&gender) {
+            return Err(MakeHumanError::Gender(gender));
+        }
+        let (sex, w) = if gender < 0.5 {
+            ("female", (0.5 - gender) * 2.0)
+        } else {
+            ("male", (gender - 0.5) * 2.0)
+        };
+        if w > 0.0 {
+            for eth in ["african", "asian", "caucasian"] {
+                let name = format!("{eth}-{sex}-young");
+                let t = a
+                    .macros
+                    .iter()
+                    .find(|t| t.name == name)
+                    .ok_or(MakeHumanError::MissingTarget(name))?;
+                t.apply(w / 3.0, &mut rest);
+            }
+        }
         let floor = rest[..body_vertices]
             .iter()
             .map(|p| p.y)

@@ -176,7 +176,28 @@ impl ClothModel {
         params: &ClothParams,
         handles: Vec<Handle>,
     ) -> Result<Self, BuildClothError> {
+        Self::build_with_kinematic(mesh, params, handles, &[])
+    }
+
+    /// [`ClothModel::build`] with `kinematic` particles: infinitely heavy (inverse mass 0), so that
+    /// forces do not move them and they do not limit the substep; the caller places them (e.g.
+    /// pieces attached to the garment beneath).
+    pub fn build_with_kinematic(
+        mesh: &PolyMesh,
+        params: &ClothParams,
+        handles: Vec<Handle>,
+        kinematic: &[u32],
+    ) -> Result<Self, BuildClothError> {
         params.validate()?;
+        if let Some(&k) = kinematic
+            .iter()
+            .find(|k| **k as usize >= mesh.positions.len())
+        {
+            return Err(BuildClothError::HandleOutOfRange {
+                particle: k,
+                count: mesh.positions.len(),
+            });
+        }
         let topology = Topology::build(mesh)?;
         let n = mesh.positions.len();
         for h in &handles {
@@ -233,13 +254,24 @@ impl ClothModel {
                 area[v as usize] += third;
             }
         }
-        let mass: Vec<Real> = area.iter().map(|a| a * params.density).collect();
+        let mut mass: Vec<Real> = area.iter().map(|a| a * params.density).collect();
+        if params.mass_floor > 0.0 && !mass.is_empty() {
+            let mut sorted = mass.clone();
+            sorted.sort_by(Real::total_cmp);
+            let floor = params.mass_floor * sorted[sorted.len() / 2];
+            for m in &mut mass {
+                *m = m.max(floor);
+            }
+        }
         let mut inv_mass: Vec<Real> = mass
             .iter()
             .map(|m| if *m > 0.0 { 1.0 / m } else { 0.0 })
             .collect();
         for h in &handles {
             inv_mass[h.particle as usize] = 0.0;
+        }
+        for &k in kinematic {
+            inv_mass[k as usize] = 0.0;
         }
         let (limit_graph, limit_graph_rest) = spring_graph(&springs, 0..shear.end, n);
         let long_range_springs = if params.long_range {

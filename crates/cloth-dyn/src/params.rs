@@ -54,6 +54,10 @@ pub struct ClothParams {
     pub max_speed: Real,
     /// How many times a failing substep may be halved before offending particles are rolled back.
     pub max_halvings: u32,
+    /// Least particle mass as a fraction of the median particle mass (0: off). Meshes made for
+    /// rendering have slivers whose tiny masses would force tiny substeps; the floor adds a little
+    /// mass there (a negligible share of the total) and bounds the substep.
+    pub mass_floor: Real,
 }
 
 impl Default for ClothParams {
@@ -81,6 +85,7 @@ impl Default for ClothParams {
             min_bend_ratio: Some(0.95),
             max_speed: 50.0,
             max_halvings: 16,
+            mass_floor: 0.0,
         }
     }
 }
@@ -184,6 +189,13 @@ impl ClothParams {
                 name: "strain_relaxation",
                 value: self.strain_relaxation.to_string(),
                 expected: "a factor in (0, 2)",
+            });
+        }
+        if !(self.mass_floor.is_finite() && (0.0..=1.0).contains(&self.mass_floor)) {
+            return Err(ParamError {
+                name: "mass_floor",
+                value: self.mass_floor.to_string(),
+                expected: "a fraction in 0..=1 of the median particle mass",
             });
         }
         if self.max_halvings > 40 {

@@ -2,7 +2,8 @@
 //! (name maps per scheme); rest poses are aligned bone by bone (the swing that turns the target's rest
 //! bone direction into the source's), so a T-pose, an arms-down pose and an A-pose all map. The root
 //! moves as the source's, scaled by the ratio of leg lengths; each leg is solved by two-bone IK toward
-//! the source's ankle (scaled), its knee in the source knee's bend plane; feet, spine, neck, head
+//! the source's ankle (scaled, and shifted across the floor by the hip joint's offset from the
+//! source's, since hip widths differ), its knee in the source knee's bend plane; feet, spine, neck, head
 //! and arms copy the source's rotations relative to the aligned rest. The clip is resampled to the
 //! scene's frame rate and eased in from the target's rest pose.
 
@@ -228,6 +229,17 @@ fn synthetic_frames(clip: &MotionClip, deg: Real) -> usize {
     k
 }
 
+/// How a target joint gets its rotation.
+#[derive(Clone, Copy)]
+enum Copy {
+    /// The source joint's world rotation times the rest alignment.
+    World(usize, UnitQuat),
+    /// The source joint's local rotation.
+    Local(usize),
+    /// The parent's world rotation.
+    Inherit,
+}
+
 struct Leg {
     src: [usize; 3],
     tgt: [usize; 3],
@@ -379,29 +391,38 @@ pub fn retarget(
     let place = |p: Vec3| target_origin + (p - source_origin) * ratio;
 
     let n = target.skeleton.parents.len();
-    // What each target joint copies: its role's source joint, else a source joint of the same
-    // name (fingers, hip joints...), each with its rest alignment; otherwise it keeps its parent's
-    // orientation.
-    let copy: Vec<Option<(usize, UnitQuat)>> = (0..n)
+    // What each target joint copies: its role's source joint (world rotation after rest alignment),
+    // else a source joint of the same name (fingers, hip and collar offsets: its local rotation, so
+    // that fixed offsets inside the pelvis and chest keep the target's proportions); otherwise it
+    // keeps its parent's orientation.
+    let copy: Vec<Copy> = (0..n)
         .map(|j| {
             if let Some(r) = crate::names::ALL_ROLES
                 .iter()
                 .find(|r| tm.get(**r) == Some(j))
             {
-                return sm.get(*r).zip(swings[*r as usize]);
+                return match (sm.get(*r), swings[*r as usize]) {
+                    (Some(js), Some(s)) => Copy::World(js, s),
+                    _ => Copy::Inherit,
+                };
             }
             let name = &target.skeleton.names[j];
-            let js = clip.skeleton.names.iter().position(|x| x == name)?;
-            let s = match (source.child_direction(js), target.child_direction(j)) {
-                (Some(a), Some(b)) => swing(b, a),
-                _ => UnitQuat::identity(),
-            };
-            Some((js, s))
+            match clip.skeleton.names.iter().position(|x| x == name) {
+                Some(js) => Copy::Local(js),
+                None => Copy::Inherit,
+            }
         })
         .collect();
     let mut unreachable = 0;
     let mut poses = Vec::with_capacity(count);
-    for (k, (gs, ps)) in src_fk.iter().enumerate() {
+    for (k, ((gs, ps), src_pose)) in src_fk.iter().zip(&src_poses).enumerate() {
+        let local_of = |js: usize| {
+            src_pose
+                .local_rotations
+                .get(js)
+                .copied()
+                .unwrap_or_default()
+        };
         let mut g: Vec<UnitQuat> = Vec::with_capacity(n);
         let mut p: Vec<Vec3> = Vec::with_capacity(n);
         let mut shins = [UnitQuat::identity(); 2];
@@ -409,7 +430,11 @@ pub fn retarget(
         for j in 0..n {
             let parent = target.skeleton.parents[j];
             let inherited = parent.map_or(UnitQuat::identity(), |q| g[q]);
-            let mut gj = copy[j].map_or(inherited, |(js, s)| gs[js] * s);
+            let mut gj = match copy[j] {
+                Copy::World(js, s) => gs[js] * s,
+                Copy::Local(js) => inherited * local_of(js),
+                Copy::Inherit => inherited,
+            };
             let pj = match parent {
                 Some(q) => p[q] + g[q] * (target.rest[j] - target.rest[q]),
                 None => place(mid_s(ps)) - gj * (mid_t_rest - target.rest[j]),
@@ -423,7 +448,12 @@ pub fn retarget(
                     let pole = (bend - line * bend.dot(&line))
                         .try_normalize(1e-6)
                         .unwrap_or_else(|| g[hips_t] * Vec3::z());
-                    let sol = solve_leg(pj, place(a_s), leg.l1, leg.l2, pole);
+                    // The ankle goes where the source's goes (scaled), shifted across the floor by
+                    // how far this hip joint sits from the source's (hip widths differ): feet keep
+                    // their stance under their own hips, heights stay the source's.
+                    let mut shift = pj - place(hs);
+                    shift.y = 0.0;
+                    let sol = solve_leg(pj, place(a_s) + shift, leg.l1, leg.l2, pole);
                     short |= !sol.reached;
                     let thigh = sol.knee - pj;
                     let shin = sol.ankle - sol.knee;

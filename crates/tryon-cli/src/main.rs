@@ -1,4 +1,5 @@
-//! The `tryon` command line: `tryon demo`, `tryon run SCENE.toml`, `tryon check SCENE.toml`.
+//! The `tryon` command line: `tryon demo`, `tryon run SCENE.toml`, `tryon check SCENE.toml`,
+//! `tryon inspect FILE`.
 //! Exit codes: 0 success, 2 bad input (the message names the file, line, key or value), 1 an
 //! internal error (an output that could not be written, a failed export).
 
@@ -47,6 +48,9 @@ enum Command {
     },
     /// Validate a scene file (parse, check values, assemble) without running it.
     Check { scene: PathBuf },
+    /// Summarise an asset: OBJ, BVH or MakeHuman file (counts, joints, frames, fps, bounding box,
+    /// likely units).
+    Inspect { file: PathBuf },
 }
 
 /// A failure and the exit code it maps to.
@@ -119,6 +123,30 @@ fn run(mut p: Pipeline, out: &Path, frames: Option<usize>, quiet: bool) -> Resul
     Ok(())
 }
 
+/// The joint-naming scheme retargeting will use for a BVH or .mhskel file, if one fits.
+fn naming_scheme(file: &Path) -> Option<&'static str> {
+    let ext = file.extension()?.to_str()?.to_ascii_lowercase();
+    let names: Vec<String> = match ext.as_str() {
+        "bvh" => tryon_io::read_bvh(file, Some(1.0)).ok()?.skeleton.names,
+        "mhskel" => tryon_io::read_mhskel(file)
+            .ok()?
+            .bones
+            .into_iter()
+            .map(|b| b.name)
+            .collect(),
+        _ => return None,
+    };
+    let skeleton = tryon_core::pose::Skeleton {
+        parents: vec![None; names.len()],
+        rest_offsets: vec![Default::default(); names.len()],
+        names,
+    };
+    Some(mocap_retarget::RoleMap::detect(&skeleton).map_or(
+        "none known (retargeting needs hips, thighs, shins and feet)",
+        |m| m.scheme,
+    ))
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
@@ -134,6 +162,14 @@ fn main() -> ExitCode {
             let out = out.unwrap_or_else(|| PathBuf::from("out").join(&s.scene.name));
             assemble(s, &scene.display().to_string()).and_then(|p| run(p, &out, frames, quiet))
         }),
+        Command::Inspect { file } => tryon_io::inspect::summarize(&file)
+            .map(|text| {
+                print!("{text}");
+                if let Some(scheme) = naming_scheme(&file) {
+                    println!("naming scheme: {scheme}");
+                }
+            })
+            .map_err(|e| Failure::BadInput(e.to_string())),
         Command::Check { scene } => load(&scene).and_then(|s| {
             let p = assemble(s, &scene.display().to_string())?;
             println!(

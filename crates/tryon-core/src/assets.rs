@@ -155,6 +155,8 @@ pub struct MakeHumanAssets {
     pub rig: Option<MhSkeleton>,
     /// Measurement targets by file name, e.g. `measure-hips-circ-incr`.
     pub targets: Vec<MorphTarget>,
+    /// Macro targets by file name, e.g. `caucasian-female-young`.
+    pub macros: Vec<MorphTarget>,
 }
 
 /// A motion clip: a skeleton, and one pose per frame at a fixed frame time. Rotations are relative

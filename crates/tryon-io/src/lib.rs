@@ -7,6 +7,7 @@ pub mod atomic;
 pub mod bvh;
 pub mod data;
 pub mod glb;
+pub mod inspect;
 pub mod makehuman;
 pub mod obj;
 pub mod preview;

@@ -322,8 +322,23 @@ pub enum MhRig {
     CmuMb,
 }
 
+/// Every .target file of a folder, sorted by name.
+pub fn read_targets(dir: &Path) -> Result<Vec<MorphTarget>, ReadError> {
+    let entries = std::fs::read_dir(dir).map_err(|source| ReadError::Io {
+        file: dir.to_path_buf(),
+        source,
+    })?;
+    let mut paths: Vec<_> = entries.filter_map(|e| e.ok().map(|e| e.path())).collect();
+    paths.sort();
+    paths
+        .iter()
+        .filter(|p| p.extension().is_some_and(|e| e == "target"))
+        .map(|p| read_target(p))
+        .collect()
+}
+
 /// Loads base.obj (metres), the default rig and weights, the chosen rig and every measurement
-/// target from a MakeHuman data folder laid out as ../shared/data is.
+/// and macro target from a MakeHuman data folder laid out as ../shared/data is.
 pub fn load_makehuman(data: &Path, rig: MhRig) -> Result<MakeHumanAssets, ReadError> {
     let mh = data.join("makehuman");
     let mut base = crate::read_obj(&mh.join("base.obj"))?;
@@ -336,26 +351,15 @@ pub fn load_makehuman(data: &Path, rig: MhRig) -> Result<MakeHumanAssets, ReadEr
             &data.join("makehuman-assets/rigs/cmu_mb.mhskel"),
         )?),
     };
-    let dir = mh.join("targets/measure");
-    let mut targets = Vec::new();
-    let entries = std::fs::read_dir(&dir).map_err(|source| ReadError::Io {
-        file: dir.clone(),
-        source,
-    })?;
-    let mut paths: Vec<_> = entries.filter_map(|e| e.ok().map(|e| e.path())).collect();
-    paths.sort();
-    for p in paths
-        .iter()
-        .filter(|p| p.extension().is_some_and(|e| e == "target"))
-    {
-        targets.push(read_target(p)?);
-    }
+    let targets = read_targets(&mh.join("targets/measure"))?;
+    let macros = read_targets(&mh.join("targets/macrodetails"))?;
     Ok(MakeHumanAssets {
         base,
         default_rig: read_mhskel(&mh.join("default.mhskel"))?,
         weights: read_mhw(&mh.join("default_weights.mhw"))?,
         rig,
         targets,
+        macros,
     })
 }
 

@@ -41,6 +41,11 @@ pub enum ReadError {
         column: usize,
         message: String,
     },
+    #[error("{file}: unknown kind of file: expected {expected}")]
+    UnknownKind {
+        file: PathBuf,
+        expected: &'static str,
+    },
     #[error("{file}:{line}: {what} exceeds the limit of {limit}")]
     Limit {
         file: PathBuf,

@@ -2,6 +2,7 @@
 //! A disabled effect leaves no stage in the list and no term in the solver.
 
 use crate::coarse::CoarseLoop;
+use crate::real;
 use crate::scene::{BodyKind, CollisionMethod, GarmentKind, IntegratorName, MotionKind, Scene};
 use body_collide::{
     BodyError, BodyFollower, BodyMesh, ExactCollider, FollowParams, Mannequin,
@@ -33,6 +34,8 @@ pub enum AssembleError {
     Params(#[from] cloth_dyn::params::ParamError),
     #[error("motion: {0}")]
     Motion(#[from] ClipError),
+    #[error(transparent)]
+    Asset(#[from] crate::real::AssetError),
 }
 
 /// The body as the pipeline drives it.
@@ -68,6 +71,8 @@ pub struct Pipeline {
     pub garment: PolyMesh,
     /// Garment vertices moved out of the body when placing it.
     pub placed_moved: usize,
+    /// Vertices of small separate pieces (pockets, patches) attached to the piece beneath.
+    pub attachments: Vec<garment_fit::Attachment>,
     pub coarse: CoarseLoop,
     /// The exact referee judging penetration (always the body's true surface, no skin).
     pub referee: ExactCollider,
@@ -131,6 +136,7 @@ impl Pipeline {
         let fx = scene.effects.clone();
         let thickness = scene.cloth.thickness.unwrap_or(0.004);
         let mut stages: Vec<&'static str> = Vec::new();
+        let mut makehuman: Option<body_collide::MakeHumanBody> = None;
         // Body and motion.
         let (body_mesh, driver, mannequin, clip_len) = match scene.body.kind {
             BodyKind::Sphere => {
@@ -179,6 +185,13 @@ impl Pipeline {
                     MotionKind::ArmRaise => {
                         Box::new(ArmRaise::new(&man.skeleton, mo.raise_deg.unwrap_or(100.0))?)
                     }
+                    MotionKind::Bvh => Box::new(real::bvh_motion(
+                        &scene,
+                        mo.file.as_deref().unwrap_or_default(),
+                        &man.skeleton,
+                        &man.joint_rest,
+                        vec![None; man.joint_rest.len()],
+                    )?),
                 };
                 let len = motion.duration();
                 let moving = mo.kind != MotionKind::Still;
@@ -192,6 +205,35 @@ impl Pipeline {
                     BodyDriver::Fixed
                 };
                 (mesh, driver, Some(man), len)
+            }
+            BodyKind::Makehuman => {
+                let b = real::makehuman_body(&scene)?;
+                let mo = &scene.motion;
+                let (motion, len): (Option<Box<dyn MotionSource>>, Real) = match mo.kind {
+                    MotionKind::Bvh => {
+                        let tips = b.joint_tails.iter().map(|t| Some(*t)).collect();
+                        let r = real::bvh_motion(
+                            &scene,
+                            mo.file.as_deref().unwrap_or_default(),
+                            &b.skeleton,
+                            &b.joint_rest,
+                            tips,
+                        )?;
+                        let len = r.duration();
+                        (Some(Box::new(r)), len)
+                    }
+                    _ => (None, mo.duration.unwrap_or(2.0)),
+                };
+                let mesh = b.mesh();
+                let driver = match motion {
+                    Some(motion) => BodyDriver::Skinned {
+                        body: Box::new(b.skinned()),
+                        motion,
+                    },
+                    None => BodyDriver::Fixed,
+                };
+                makehuman = Some(b);
+                (mesh, driver, None, len)
             }
         };
         let moving = matches!(driver, BodyDriver::Skinned { .. });
@@ -239,11 +281,36 @@ impl Pipeline {
                 let size = g.size.unwrap_or(1.0);
                 grid_xz(n, n, size, size, g.drop_height.unwrap_or(0.5))
             }
+            GarmentKind::Mhclo => {
+                let (binding, obj) = real::mhclo(&scene, g.file.as_deref().unwrap_or_default())?;
+                let rest = makehuman.as_ref().map(|b| b.rest.as_slice()).unwrap_or(&[]);
+                let fitted = garment_fit::fit_garment(&binding, &obj, rest)
+                    .map_err(|e| AssembleError::Asset(e.into()))?;
+                // Collapse sliver edges (doubled hems): below 15% of the median edge.
+                let min_len = 0.15 * garment_fit::median_edge(&fitted);
+                garment_fit::weld_short_edges(&fitted, min_len)
+                    .map_err(|e| {
+                        AssembleError::Asset(
+                            garment_fit::FitError::Mesh {
+                                name: binding.name.clone(),
+                                source: e,
+                            }
+                            .into(),
+                        )
+                    })?
+                    .mesh
+            }
         };
         let placed_moved = if fx.body_collision == CollisionMethod::None {
             0
         } else {
             garment_fit::place_outside(&mut garment, &mut referee)
+        };
+        // Small separate pieces of a real garment ride on the piece beneath them.
+        let attachments = if g.kind == GarmentKind::Mhclo {
+            garment_fit::attach_small_pieces(&garment, 0.1, 0.03)
+        } else {
+            Vec::new()
         };
         // The referee judges the true surface.
         let referee = ExactCollider::new(&body_mesh, 0.0)?;
@@ -251,6 +318,10 @@ impl Pipeline {
         // Cloth: material from the garment's resolution, then the scene's overrides and effects.
         let c = &scene.cloth;
         let mut p = garment_params(mean_edge(&garment), c.density.unwrap_or(0.2));
+        if g.kind == GarmentKind::Mhclo {
+            // Garments modelled for rendering have slivers (0.5 mm edges beside 1.5 cm ones).
+            p.mass_floor = 0.3;
+        }
         let set = |dst: &mut Real, v: Option<Real>| {
             if let Some(v) = v {
                 *dst = v;
@@ -282,7 +353,8 @@ impl Pipeline {
             IntegratorName::Rk4 => IntegratorKind::Rk4,
             IntegratorName::SymplecticEuler => IntegratorKind::SymplecticEuler,
         };
-        let model = ClothModel::build(&garment, &p, vec![])?;
+        let kinematic: Vec<u32> = attachments.iter().map(|a| a.vertex).collect();
+        let model = ClothModel::build_with_kinematic(&garment, &p, vec![], &kinematic)?;
         let sim = ClothSim::new(model, p, kind);
         let collider: Box<dyn Collider> = match fx.body_collision {
             CollisionMethod::NearestVertex => {
@@ -303,6 +375,9 @@ impl Pipeline {
             stages.push("collider_update");
         }
         stages.push("cloth");
+        if !attachments.is_empty() {
+            stages.push("attach_pieces");
+        }
         stages.push("referee");
         let coarse = CoarseLoop::new(sim, collider, follower);
         let fps = scene.scene.fps;
@@ -318,6 +393,7 @@ impl Pipeline {
             driver,
             garment,
             placed_moved,
+            attachments,
             coarse,
             referee,
             mannequin,

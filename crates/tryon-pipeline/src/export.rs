@@ -48,10 +48,10 @@ impl Pipeline {
             let poses: Vec<&Pose> = run.frames.iter().filter_map(|f| f.pose.as_ref()).collect();
             let roots: Vec<Vec3> = poses.iter().map(|p| p.root_translation).collect();
             let rots: Vec<_> = poses.iter().map(|p| p.local_rotations.clone()).collect();
-            let body = match (&self.driver, &self.mannequin) {
-                (BodyDriver::Skinned { .. }, Some(m)) if poses.len() == run.frames.len() => {
+            let body = match &self.driver {
+                BodyDriver::Skinned { body: m, .. } if poses.len() == run.frames.len() => {
                     BodyExport::Skinned(SkinnedExport {
-                        positions: &m.mesh.positions,
+                        positions: &m.rest_positions,
                         triangles: &run.body_triangles,
                         joint_names: &m.skeleton.names,
                         parents: &m.skeleton.parents,

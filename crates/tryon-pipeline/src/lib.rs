@@ -8,6 +8,7 @@ pub mod coarse;
 pub mod drape;
 pub mod export;
 pub mod metrics;
+pub mod real;
 pub mod run;
 pub mod scene;
 
@@ -15,5 +16,6 @@ pub use assemble::{AssembleError, BodyDriver, Pipeline, garment_params};
 pub use coarse::CoarseLoop;
 pub use drape::{DrapeConfig, DrapeError, DrapeReport, DrapeScene, FrameTrace};
 pub use export::ExportError;
+pub use real::AssetError;
 pub use run::{FrameRecord, RunOutput, Stats};
 pub use scene::{DEMO_SCENE, Scene, SceneError};

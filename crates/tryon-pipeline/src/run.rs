@@ -194,7 +194,7 @@ impl Pipeline {
             root_rest: Vec3::zeros(),
             prev_root: (Mat3::identity(), Vec3::zeros()),
         };
-        if let Some(m) = &self.mannequin {
+        if let BodyDriver::Skinned { body: m, .. } = &self.driver {
             st.root = m
                 .skeleton
                 .parents
@@ -271,6 +271,15 @@ impl Pipeline {
         let report = timers.time("cloth", || {
             c.sim.step_frame(&mut c.frame, dt, c.collider.as_mut())
         });
+        if !self.attachments.is_empty() {
+            timers.time("attach_pieces", || {
+                garment_fit::apply_attachments(
+                    &self.attachments,
+                    &mut c.frame.positions,
+                    &mut c.frame.velocities,
+                )
+            });
+        }
         if let Some(f) = &mut c.follower {
             timers.time("follow_body", || f.record(&c.frame.positions));
         }

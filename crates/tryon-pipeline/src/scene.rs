@@ -62,13 +62,29 @@ impl Default for SceneSection {
 pub enum BodyKind {
     Mannequin,
     Sphere,
+    /// MakeHuman's base mesh from the shared assets, morphed toward any measurements given.
+    Makehuman,
 }
 
-/// The body: the parametric mannequin (measurements in metres) or a fixed sphere.
+/// The rig that skins a MakeHuman body.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum RigName {
+    /// MakeHuman's cmu_mb (31 bones, CMU names).
+    CmuMb,
+    /// MakeHuman's default rig (163 bones).
+    Default,
+}
+
+/// The body: the parametric mannequin (measurements in metres), a MakeHuman body or a fixed sphere.
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct BodySection {
     pub kind: BodyKind,
+    /// MakeHuman: the skinning rig (default `cmu_mb`).
+    pub rig: Option<RigName>,
+    /// MakeHuman: 0 female ..= 1 male; 0.5 (the default) is the raw base mesh.
+    pub gender: Option<Real>,
     pub height: Option<Real>,
     pub bust: Option<Real>,
     pub waist: Option<Real>,
@@ -89,6 +105,8 @@ pub enum GarmentKind {
     Skirt,
     /// A horizontal square sheet (the drape scene).
     Square,
+    /// A MakeHuman garment (.mhclo binding and its OBJ) fitted onto the MakeHuman body.
+    Mhclo,
 }
 
 /// The garment: a pattern sized from the body's measurements, or a square sheet.
@@ -106,6 +124,8 @@ pub struct GarmentSection {
     pub particles: Option<usize>,
     pub size: Option<Real>,
     pub drop_height: Option<Real>,
+    /// Mhclo: the .mhclo file (relative to the scene file, else to the shared asset folder).
+    pub file: Option<String>,
 }
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
@@ -114,6 +134,8 @@ pub enum MotionKind {
     Still,
     Walk,
     ArmRaise,
+    /// A BVH clip retargeted onto the body's skeleton (P1.6).
+    Bvh,
 }
 
 /// The motion driving the body.
@@ -128,6 +150,14 @@ pub struct MotionSection {
     pub knee_deg: Option<Real>,
     pub arm_deg: Option<Real>,
     pub raise_deg: Option<Real>,
+    /// Bvh: the clip (relative to the scene file, else to the shared asset folder).
+    pub file: Option<String>,
+    /// Bvh: seconds of the clip to skip.
+    pub start: Option<Real>,
+    /// Bvh: blend-in time from the rest pose (s).
+    pub ease_in: Option<Real>,
+    /// Bvh: metres per file unit (guessed from the figure's size when absent).
+    pub unit: Option<Real>,
 }
 
 impl Default for MotionSection {
@@ -140,6 +170,10 @@ impl Default for MotionSection {
             knee_deg: None,
             arm_deg: None,
             raise_deg: None,
+            file: None,
+            start: None,
+            ease_in: None,
+            unit: None,
         }
     }
 }
@@ -257,6 +291,9 @@ pub struct Scene {
     pub effects: EffectsSection,
     #[serde(default)]
     pub output: OutputSection,
+    /// The file the scene was read from (asset paths are resolved beside it).
+    #[serde(skip)]
+    pub source: Option<PathBuf>,
 }
 
 /// The embedded default scene (`tryon demo`): the mannequin in the dress, walking.
@@ -315,7 +352,9 @@ impl Scene {
             path: path.to_path_buf(),
             source,
         })?;
-        Scene::parse(&text, path)
+        let mut scene = Scene::parse(&text, path)?;
+        scene.source = Some(path.to_path_buf());
+        Ok(scene)
     }
 
     /// The embedded demo scene.
@@ -428,6 +467,52 @@ impl Scene {
         range("motion", "knee_deg", m.knee_deg, 0.0, 120.0)?;
         range("motion", "arm_deg", m.arm_deg, 0.0, 60.0)?;
         range("motion", "raise_deg", m.raise_deg, 0.0, 150.0)?;
+        range("body", "gender", b.gender, 0.0, 1.0)?;
+        range("motion", "start", m.start, 0.0, 3600.0)?;
+        range("motion", "ease_in", m.ease_in, 0.0, 10.0)?;
+        range("motion", "unit", m.unit, 1e-4, 10.0)?;
+        if m.kind == MotionKind::Bvh && m.file.is_none() {
+            return Err(bad(
+                "motion",
+                "file",
+                "nothing".into(),
+                "a .bvh file for kind = \"bvh\"",
+            ));
+        }
+        if g.kind == GarmentKind::Mhclo && g.file.is_none() {
+            return Err(bad(
+                "garment",
+                "file",
+                "nothing".into(),
+                "a .mhclo file for kind = \"mhclo\"",
+            ));
+        }
+        if g.kind == GarmentKind::Mhclo && b.kind != BodyKind::Makehuman {
+            return Err(bad(
+                "garment",
+                "kind",
+                "\"mhclo\"".into(),
+                "a MakeHuman body ([body] kind = \"makehuman\") to bind the garment to",
+            ));
+        }
+        if b.kind != BodyKind::Makehuman {
+            if b.rig.is_some() {
+                return Err(bad(
+                    "body",
+                    "rig",
+                    format!("{:?}", b.rig),
+                    "no rig: only MakeHuman bodies take one",
+                ));
+            }
+            if let Some(x) = b.gender {
+                return Err(bad(
+                    "body",
+                    "gender",
+                    x.to_string(),
+                    "no gender: only MakeHuman bodies take one",
+                ));
+            }
+        }
         let c = &self.cloth;
         range("cloth", "substep", c.substep, 1e-5, 0.1)?;
         range("cloth", "density", c.density, 1e-3, 10.0)?;
@@ -490,6 +575,26 @@ impl Scene {
                 "kind",
                 format!("{:?}", self.motion.kind).to_lowercase(),
                 "\"still\" for a sphere body (it has no skeleton)",
+            ));
+        }
+        if self.body.kind == BodyKind::Makehuman
+            && matches!(g.kind, GarmentKind::Dress | GarmentKind::Skirt)
+        {
+            return Err(bad(
+                "garment",
+                "kind",
+                format!("{:?}", g.kind).to_lowercase(),
+                "\"mhclo\" or \"square\" on a MakeHuman body (patterns are cut for the mannequin)",
+            ));
+        }
+        if self.body.kind == BodyKind::Makehuman
+            && matches!(self.motion.kind, MotionKind::Walk | MotionKind::ArmRaise)
+        {
+            return Err(bad(
+                "motion",
+                "kind",
+                format!("{:?}", self.motion.kind).to_lowercase(),
+                "\"still\" or \"bvh\" on a MakeHuman body (the built-in clips drive the mannequin's joints)",
             ));
         }
         if self.body.kind == BodyKind::Sphere && g.kind != GarmentKind::Square {

@@ -1,0 +1,168 @@
+//! Small garment pieces that are not sewn to the rest (a pocket or a patch modelled as its own
+//! piece, as MakeHuman garments often are) would fall off a simulated garment. Each vertex of such a
+//! piece is attached to the nearest triangle of another piece: it keeps its barycentric place and
+//! its distance along the triangle's normal, and is set there after every cloth step.
+
+use tryon_core::math::{Real, Vec3, closest_point_on_triangle};
+use tryon_core::mesh::PolyMesh;
+
+/// One attached vertex.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Attachment {
+    pub vertex: u32,
+    pub triangle: [u32; 3],
+    pub bary: [Real; 3],
+    /// Signed distance along the triangle's unit normal.
+    pub offset: Real,
+}
+
+/// Connected components of a mesh: the component id of every vertex, ids dense from 0.
+pub fn components(mesh: &PolyMesh) -> Vec<usize> {
+    let n = mesh.positions.len();
+    let mut parent: Vec<usize> = (0..n).collect();
+    fn find(p: &mut [usize], mut a: usize) -> usize {
+        while p[a] != a {
+            p[a] = p[p[a]];
+            a = p[a];
+        }
+        a
+    }
+    for f in &mesh.faces {
+        let v = f.vertices();
+        for w in &v[1..] {
+            let (a, b) = (
+                find(&mut parent, v[0] as usize),
+                find(&mut parent, *w as usize),
+            );
+            parent[a] = b;
+        }
+    }
+    let mut id = vec![usize::MAX; n];
+    let mut next = 0;
+    (0..n)
+        .map(|v| {
+            let r = find(&mut parent, v);
+            if id[r] == usize::MAX {
+                id[r] = next;
+                next += 1;
+            }
+            id[r]
+        })
+        .collect()
+}
+
+/// Attachments for every piece with fewer than `max_share` of the vertices, to the nearest
+/// triangle of the other pieces within `max_gap` (m). Pieces farther away stay free.
+pub fn attach_small_pieces(mesh: &PolyMesh, max_share: Real, max_gap: Real) -> Vec<Attachment> {
+    let comp = components(mesh);
+    let pieces = comp.iter().copied().max().map_or(0, |m| m + 1);
+    if pieces < 2 {
+        return Vec::new();
+    }
+    let mut size = vec![0usize; pieces];
+    for c in &comp {
+        size[*c] += 1;
+    }
+    let (tris, _) = mesh.triangulate();
+    let p = &mesh.positions;
+    let mut out = Vec::new();
+    for piece in (0..pieces).filter(|c| (size[*c] as Real) < max_share * p.len() as Real) {
+        // The whole piece rides on one host piece: the one nearest to most of its vertices.
+        let verts: Vec<usize> = (0..p.len()).filter(|v| comp[*v] == piece).collect();
+        let nearest = |v: usize, host: Option<usize>| -> Option<(Real, Attachment, usize)> {
+            let mut best: Option<(Real, Attachment, usize)> = None;
+            for t in tris.iter().filter(|t| {
+                let c = comp[t[0] as usize];
+                c != piece && host.is_none_or(|h| h == c)
+            }) {
+                let [a, b, c] = t.map(|i| p[i as usize]);
+                let (q, bary) = closest_point_on_triangle(&p[v], &a, &b, &c);
+                let d = (p[v] - q).norm();
+                if best.as_ref().is_none_or(|(bd, _, _)| d < *bd) {
+                    let n = (b - a)
+                        .cross(&(c - a))
+                        .try_normalize(1e-15)
+                        .unwrap_or(Vec3::y());
+                    let att = Attachment {
+                        vertex: v as u32,
+                        triangle: *t,
+                        bary,
+                        offset: (p[v] - q).dot(&n),
+                    };
+                    best = Some((d, att, comp[t[0] as usize]));
+                }
+            }
+            best
+        };
+        let mut votes = vec![0usize; pieces];
+        for &v in &verts {
+            if let Some((_, _, h)) = nearest(v, None) {
+                votes[h] += 1;
+            }
+        }
+        let host = (0..pieces).max_by_key(|h| votes[*h]);
+        let mut found = Vec::new();
+        for &v in &verts {
+            match nearest(v, host) {
+                Some((d, a, _)) if d <= max_gap => found.push(a),
+                _ => {
+                    found.clear();
+                    break;
+                }
+            }
+        }
+        out.extend(found);
+    }
+    out
+}
+
+/// Places every attached vertex on its triangle and gives it the triangle's velocity.
+pub fn apply_attachments(att: &[Attachment], x: &mut [Vec3], v: &mut [Vec3]) {
+    for a in att {
+        let [i, j, k] = a.triangle.map(|t| t as usize);
+        let [wa, wb, wc] = a.bary;
+        let n = (x[j] - x[i])
+            .cross(&(x[k] - x[i]))
+            .try_normalize(1e-15)
+            .unwrap_or(Vec3::y());
+        let p = x[i] * wa + x[j] * wb + x[k] * wc + n * a.offset;
+        let vel = v[i] * wa + v[j] * wb + v[k] * wc;
+        x[a.vertex as usize] = p;
+        v[a.vertex as usize] = vel;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use tryon_core::mesh::{Face, grid_xz};
+
+    #[test]
+    fn a_patch_above_a_sheet_rides_with_it() {
+        let mut mesh = grid_xz(4, 4, 1.0, 1.0, 0.0);
+        let base = mesh.positions.len() as u32;
+        for (x, z) in [(0.1, 0.1), (0.3, 0.1), (0.3, 0.3), (0.1, 0.3)] {
+            mesh.positions.push(Vec3::new(x, 0.01, z));
+        }
+        mesh.faces
+            .push(Face::Quad([base, base + 3, base + 2, base + 1]));
+        assert_eq!(components(&mesh).iter().max(), Some(&1));
+        let att = attach_small_pieces(&mesh, 0.3, 0.05);
+        assert_eq!(att.len(), 4);
+        let mut x = mesh.positions.clone();
+        let mut v = vec![Vec3::zeros(); x.len()];
+        for p in x.iter_mut().take(base as usize) {
+            p.y += 1.0;
+        }
+        apply_attachments(&att, &mut x, &mut v);
+        for k in 0..4 {
+            let moved = x[base as usize + k] - mesh.positions[base as usize + k];
+            assert!(
+                (moved - Vec3::new(0.0, 1.0, 0.0)).norm() < 1e-12,
+                "{moved:?}"
+            );
+        }
+        // A patch too far away stays free.
+        assert!(attach_small_pieces(&mesh, 0.3, 0.001).is_empty());
+    }
+}
