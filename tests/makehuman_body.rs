@@ -135,3 +135,35 @@ fn garments_fit_outside_raw_and_morphed_bodies() {
         }
     }
 }
+
+#[test]
+fn makehuman_scenes_run_finite_and_report_penetration_and_stretch() {
+    let scenes = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/scenes");
+    for (name, frames) in [("makehuman-dress-walk", 14), ("makehuman-casual-131", 14)] {
+        let scene = tryon_pipeline::Scene::load(&scenes.join(format!("{name}.toml"))).unwrap();
+        let mut p = tryon_pipeline::Pipeline::new(scene).unwrap();
+        assert!(
+            p.stages.contains(&"motion") && p.stages.contains(&"skinning"),
+            "{:?}",
+            p.stages
+        );
+        let out = p.run(Some(frames), |_, _| {});
+        assert_eq!(
+            out.frames.len(),
+            frames + 1,
+            "the placed garment, then one record per frame"
+        );
+        for f in &out.frames {
+            assert!(f.garment.iter().all(|x| x.iter().all(|c| c.is_finite())));
+        }
+        let m = &out.stats.metrics;
+        eprintln!(
+            "{name}: {frames} frames, penetration max {:.1} mm, stretch max {:.3}, mean {:.3}",
+            m.max_penetration_m * 1e3,
+            m.max_stretch,
+            m.mean_stretch
+        );
+        assert!(m.max_penetration_m.is_finite() && m.max_stretch >= 1.0);
+        assert_eq!(m.non_finite_events, 0);
+    }
+}

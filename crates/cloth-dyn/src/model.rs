@@ -225,23 +225,24 @@ impl ClothModel {
         let pos = &mesh.positions;
         let mut springs = SpringSet::default();
         let c = params.spring_damping;
-        let add = |s: &mut SpringSet, a: u32, b: u32, ks: Real, kc: Real| {
-            let rest = (pos[a as usize] - pos[b as usize]).norm();
+        let add = |s: &mut SpringSet, a: u32, b: u32, ks: Real, kc: Real, scale: Real| {
+            let rest = (pos[a as usize] - pos[b as usize]).norm() * scale;
             s.push(a, b, rest, ks, kc, c);
         };
+        let r = params.rest_scale;
         for &[a, b] in &topology.edges {
-            add(&mut springs, a, b, params.k_stretch, params.k_compress);
+            add(&mut springs, a, b, params.k_stretch, params.k_compress, r);
         }
         let structural = 0..springs.len();
         for f in &mesh.faces {
             if let Face::Quad([a, b, cc, d]) = *f {
-                add(&mut springs, a, cc, params.k_shear, params.k_shear);
-                add(&mut springs, b, d, params.k_shear, params.k_shear);
+                add(&mut springs, a, cc, params.k_shear, params.k_shear, r);
+                add(&mut springs, b, d, params.k_shear, params.k_shear, r);
             }
         }
         let shear = structural.end..springs.len();
         for (a, b) in bend_pairs(mesh, &topology) {
-            add(&mut springs, a, b, params.k_bend, params.k_bend);
+            add(&mut springs, a, b, params.k_bend, params.k_bend, 1.0);
         }
         let bend = shear.end..springs.len();
 
@@ -259,7 +260,8 @@ impl ClothModel {
             let mut sorted = mass.clone();
             sorted.sort_by(Real::total_cmp);
             let floor = params.mass_floor * sorted[sorted.len() / 2];
-            for m in &mut mass {
+            // Particles without area (no face) stay massless, hence immobile.
+            for m in mass.iter_mut().filter(|m| **m > 0.0) {
                 *m = m.max(floor);
             }
         }

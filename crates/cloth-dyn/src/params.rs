@@ -58,6 +58,10 @@ pub struct ClothParams {
     /// rendering have slivers whose tiny masses would force tiny substeps; the floor adds a little
     /// mass there (a negligible share of the total) and bounds the substep.
     pub mass_floor: Real,
+    /// Rest lengths of stretch and shear springs as a fraction of the mesh's edge lengths (1: the
+    /// mesh is the rest shape). Below 1 the garment is worn under a little tension, so that friction
+    /// can hold it (a waistband that is exactly its modelled size grips nothing).
+    pub rest_scale: Real,
 }
 
 impl Default for ClothParams {
@@ -86,6 +90,7 @@ impl Default for ClothParams {
             max_speed: 50.0,
             max_halvings: 16,
             mass_floor: 0.0,
+            rest_scale: 1.0,
         }
     }
 }
@@ -196,6 +201,13 @@ impl ClothParams {
                 name: "mass_floor",
                 value: self.mass_floor.to_string(),
                 expected: "a fraction in 0..=1 of the median particle mass",
+            });
+        }
+        if !(self.rest_scale.is_finite() && (0.5..=1.5).contains(&self.rest_scale)) {
+            return Err(ParamError {
+                name: "rest_scale",
+                value: self.rest_scale.to_string(),
+                expected: "a fraction in 0.5..=1.5 of the mesh's edge lengths",
             });
         }
         if self.max_halvings > 40 {

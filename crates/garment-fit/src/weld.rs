@@ -6,7 +6,7 @@
 use tryon_core::math::{Real, Vec3};
 use tryon_core::mesh::{Face, MeshError, PolyMesh};
 
-/// The welded mesh and, for each old vertex, its new index.
+/// The welded mesh and, for each old vertex, its new index (`u32::MAX` when it was dropped).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Welded {
     pub mesh: PolyMesh,
@@ -32,7 +32,7 @@ pub fn median_edge(mesh: &PolyMesh) -> Real {
 
 /// Collapses every face edge shorter than `min_len` (welded groups go to their mean position);
 /// faces left with fewer than three distinct vertices are dropped, quads with three become
-/// triangles. Vertices keep their relative order.
+/// triangles, vertices no face uses are dropped. Vertices keep their relative order.
 pub fn weld_short_edges(mesh: &PolyMesh, min_len: Real) -> Result<Welded, MeshError> {
     let n = mesh.positions.len();
     let mut parent: Vec<usize> = (0..n).collect();
@@ -92,7 +92,30 @@ pub fn weld_short_edges(mesh: &PolyMesh, min_len: Real) -> Result<Welded, MeshEr
         .filter(|&i| probe.face_area(i) > 1e-12)
         .map(|i| faces[i])
         .collect();
-    let mesh = PolyMesh::new(probe.positions, keep)?;
+    // Drop vertices no face uses any more (a cloth particle without area would fly free).
+    let mut used = vec![false; probe.positions.len()];
+    for f in &keep {
+        for &v in f.vertices() {
+            used[v as usize] = true;
+        }
+    }
+    let mut compact = vec![u32::MAX; used.len()];
+    let mut positions = Vec::with_capacity(used.len());
+    for (v, u) in used.iter().enumerate() {
+        if *u {
+            compact[v] = positions.len() as u32;
+            positions.push(probe.positions[v]);
+        }
+    }
+    let faces = keep
+        .iter()
+        .map(|f| match *f {
+            Face::Tri(t) => Face::Tri(t.map(|v| compact[v as usize])),
+            Face::Quad(q) => Face::Quad(q.map(|v| compact[v as usize])),
+        })
+        .collect();
+    let map = map.iter().map(|m| compact[*m as usize]).collect();
+    let mesh = PolyMesh::new(positions, faces)?;
     Ok(Welded { mesh, map })
 }
 

@@ -321,6 +321,8 @@ impl Pipeline {
         if g.kind == GarmentKind::Mhclo {
             // Garments modelled for rendering have slivers (0.5 mm edges beside 1.5 cm ones).
             p.mass_floor = 0.3;
+            // Worn under a little tension, so that friction holds waistbands (see rest_scale).
+            p.rest_scale = 0.95;
         }
         let set = |dst: &mut Real, v: Option<Real>| {
             if let Some(v) = v {
