@@ -3,6 +3,7 @@
 //! piece is attached to the nearest triangle of another piece: it keeps its barycentric place and
 //! its distance along the triangle's normal, and is set there after every cloth step.
 
+use crate::find_root as find;
 use tryon_core::math::{Real, Vec3, closest_point_on_triangle};
 use tryon_core::mesh::PolyMesh;
 
@@ -20,13 +21,6 @@ pub struct Attachment {
 pub fn components(mesh: &PolyMesh) -> Vec<usize> {
     let n = mesh.positions.len();
     let mut parent: Vec<usize> = (0..n).collect();
-    fn find(p: &mut [usize], mut a: usize) -> usize {
-        while p[a] != a {
-            p[a] = p[p[a]];
-            a = p[a];
-        }
-        a
-    }
     for f in &mesh.faces {
         let v = f.vertices();
         for w in &v[1..] {

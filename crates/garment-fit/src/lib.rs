@@ -13,3 +13,12 @@ pub use attach::{Attachment, apply_attachments, attach_small_pieces, components}
 pub use mhclo::{FitError, binding_scales, fit_garment, fit_garment_outside, fit_positions};
 pub use patterns::{DressParams, Garment, PatternError, SkirtParams, dress, place_outside, skirt};
 pub use weld::{Welded, median_edge, weld_short_edges};
+
+/// Union-find root of `a` with path halving (`parent[r] == r` at a root).
+pub(crate) fn find_root(parent: &mut [usize], mut a: usize) -> usize {
+    while parent[a] != a {
+        parent[a] = parent[parent[a]];
+        a = parent[a];
+    }
+    a
+}

@@ -3,6 +3,7 @@
 //! Such edges carry no visible shape, but a mass-spring cloth pays for them with tiny substeps and
 //! meaningless strain readings.
 
+use crate::find_root as find;
 use tryon_core::math::{Real, Vec3};
 use tryon_core::mesh::{Face, MeshError, PolyMesh};
 
@@ -36,13 +37,6 @@ pub fn median_edge(mesh: &PolyMesh) -> Real {
 pub fn weld_short_edges(mesh: &PolyMesh, min_len: Real) -> Result<Welded, MeshError> {
     let n = mesh.positions.len();
     let mut parent: Vec<usize> = (0..n).collect();
-    fn find(p: &mut [usize], mut a: usize) -> usize {
-        while p[a] != a {
-            p[a] = p[p[a]];
-            a = p[a];
-        }
-        a
-    }
     for f in &mesh.faces {
         let v = f.vertices();
         for k in 0..v.len() {
