@@ -47,6 +47,65 @@ fn frame_of(body: &BodyMesh, f: usize) -> (Vec3, Vec3, Vec3, Vec3) {
     (v0, v1 - v0, v2 - v0, body.face_normals[f])
 }
 
+/// Closest point on the faces around `v` and around its neighbours (the two-ring), which finds
+/// the right face even where long triangles put the closest point outside the nearest vertex's fan.
+fn closest_near(body: &BodyMesh, p: &Vec3, v: u32) -> (u32, Vec3) {
+    let (mut f, mut q, _) = body.closest_on_fan(p, v);
+    let mut best = (q - p).norm_squared();
+    for &w in body.ring.row(v as usize) {
+        let (f2, q2, _) = body.closest_on_fan(p, w);
+        let d = (q2 - p).norm_squared();
+        if d < best {
+            (f, q, best) = (f2, q2, d);
+        }
+    }
+    (f, q)
+}
+
+/// `p`'s coordinates in face `f`'s frame: two edge coordinates and a height along the unit normal.
+fn coordinates(body: &BodyMesh, p: &Vec3, f: usize) -> Option<[Real; 3]> {
+    let (v0, e1, e2, n) = frame_of(body, f);
+    let r = p - v0;
+    let c = r.dot(&n);
+    let r = r - n * c;
+    let (g11, g12, g22) = (e1.dot(&e1), e1.dot(&e2), e2.dot(&e2));
+    let det = g11 * g22 - g12 * g12;
+    if !(det > 0.0) {
+        return None;
+    }
+    let (r1, r2) = (r.dot(&e1), r.dot(&e2));
+    Some([(r1 * g22 - r2 * g12) / det, (r2 * g11 - r1 * g12) / det, c])
+}
+
+/// The point at face coordinates `abc` of face `f` on the body's current shape.
+fn place(body: &BodyMesh, f: u32, abc: [Real; 3]) -> Vec3 {
+    let (v0, e1, e2, n) = frame_of(body, f as usize);
+    v0 + e1 * abc[0] + e2 * abc[1] + n * abc[2]
+}
+
+/// A point fixed to the body's surface for good (a garment's elastic band sewn in place): its
+/// nearest face and its coordinates there, recorded once.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceBinding {
+    pub face: u32,
+    /// p = v0 + a (v1 - v0) + b (v2 - v0) + c n.
+    pub abc: [Real; 3],
+}
+
+impl SurfaceBinding {
+    /// Binds `p` to its nearest face on the body's current shape (`None` on a degenerate face).
+    pub fn bind(body: &BodyMesh, p: &Vec3) -> Option<Self> {
+        let v = body.nearest_vertex_brute(p);
+        let (face, _) = closest_near(body, p, v);
+        coordinates(body, p, face as usize).map(|abc| SurfaceBinding { face, abc })
+    }
+
+    /// Where the bound point is on the body's current shape.
+    pub fn position(&self, body: &BodyMesh) -> Vec3 {
+        place(body, self.face, self.abc)
+    }
+}
+
 impl BodyFollower {
     /// A follower for a body mesh (given in its current shape).
     pub fn new(body: BodyMesh, params: FollowParams) -> Self {
@@ -70,7 +129,7 @@ impl BodyFollower {
         for (i, p) in points.iter().enumerate() {
             let v = self.body.climb(p, self.nearest[i]);
             self.nearest[i] = v;
-            let (f, q) = self.closest_near(p, v);
+            let (f, q) = closest_near(&self.body, p, v);
             let dist = (p - q).norm();
             let weight = if dist <= self.params.near {
                 1.0
@@ -80,7 +139,7 @@ impl BodyFollower {
                 0.0
             };
             self.attached.push(if weight > 0.0 {
-                self.coordinates(p, f as usize).map(|abc| Attachment {
+                coordinates(&self.body, p, f as usize).map(|abc| Attachment {
                     face: f,
                     abc,
                     weight,
@@ -91,41 +150,12 @@ impl BodyFollower {
         }
     }
 
-    /// Closest point on the faces around `v` and around its neighbours (the two-ring), which finds
-    /// the right face even where long triangles put the closest point outside the nearest vertex's fan.
-    fn closest_near(&self, p: &Vec3, v: u32) -> (u32, Vec3) {
-        let (mut f, mut q, _) = self.body.closest_on_fan(p, v);
-        let mut best = (q - p).norm_squared();
-        for &w in self.body.ring.row(v as usize) {
-            let (f2, q2, _) = self.body.closest_on_fan(p, w);
-            let d = (q2 - p).norm_squared();
-            if d < best {
-                (f, q, best) = (f2, q2, d);
-            }
-        }
-        (f, q)
-    }
-
     /// The follow weight of each recorded point (1 = follows fully, 0 = not attached).
     pub fn weights(&self) -> Vec<Real> {
         self.attached
             .iter()
             .map(|a| a.map_or(0.0, |a| a.weight))
             .collect()
-    }
-
-    fn coordinates(&self, p: &Vec3, f: usize) -> Option<[Real; 3]> {
-        let (v0, e1, e2, n) = frame_of(&self.body, f);
-        let r = p - v0;
-        let c = r.dot(&n);
-        let r = r - n * c;
-        let (g11, g12, g22) = (e1.dot(&e1), e1.dot(&e2), e2.dot(&e2));
-        let det = g11 * g22 - g12 * g12;
-        if !(det > 0.0) {
-            return None;
-        }
-        let (r1, r2) = (r.dot(&e1), r.dot(&e2));
-        Some([(r1 * g22 - r2 * g12) / det, (r2 * g11 - r1 * g12) / det, c])
     }
 
     /// Takes the body's new shape and moves every recorded point to its face coordinates there.
@@ -135,9 +165,7 @@ impl BodyFollower {
         let mut moved = 0;
         for (p, a) in points.iter_mut().zip(&self.attached) {
             let Some(a) = a else { continue };
-            let (v0, e1, e2, n) = frame_of(&self.body, a.face as usize);
-            let [ca, cb, cc] = a.abc;
-            let target = v0 + e1 * ca + e2 * cb + n * cc;
+            let target = place(&self.body, a.face, a.abc);
             if tryon_core::math::is_finite(&target) {
                 *p += (target - *p) * a.weight;
                 moved += 1;

@@ -22,7 +22,7 @@ pub mod tracker;
 
 pub use body::{BodyError, BodyMesh};
 pub use exact::{ExactCollider, penetration_depths};
-pub use follow::{BodyFollower, FollowParams};
+pub use follow::{BodyFollower, FollowParams, SurfaceBinding};
 pub use girth::girth_at;
 pub use makehuman::{Girths, MakeHumanBody, MakeHumanError};
 pub use mannequin::{JOINT_NAMES, Mannequin};

@@ -1,6 +1,8 @@
 //! Property tests of the colliders and body following against the exact referee.
 
-use crate::{BodyFollower, BodyMesh, ExactCollider, FollowParams, NearestVertexCollider};
+use crate::{
+    BodyFollower, BodyMesh, ExactCollider, FollowParams, NearestVertexCollider, SurfaceBinding,
+};
 use proptest::prelude::*;
 use tryon_core::frames::BodyFrame;
 use tryon_core::math::{Iso3, Real, UnitQuat, Vec3};
@@ -182,4 +184,25 @@ fn wrong_body_frames_are_rejected_not_panicking() {
     tracker.resolve(&mut pts, &mut Vec::new());
     // Moved out onto a face of the level-1 icosphere (face centres lie 0.28 m from its centre).
     assert!(pts[0].norm() > 0.27, "{:?}", pts[0]);
+}
+
+proptest! {
+    /// A surface binding reproduces its point on the body it was made on, and moves with the
+    /// body's rigid motions exactly.
+    #[test]
+    fn bindings_ride_rigid_motion(m in body_strategy(), s in seeds(), rot in prop::array::uniform3(-3.0..3.0f64), tr in prop::array::uniform3(-1.0..1.0f64)) {
+        let mut body = BodyMesh::new(&m).unwrap();
+        let pts = points_near(&m, &s);
+        let bound: Vec<SurfaceBinding> = pts.iter().map(|p| SurfaceBinding::bind(&body, p).unwrap()).collect();
+        for (p, b) in pts.iter().zip(&bound) {
+            prop_assert!((b.position(&body) - p).norm() < 1e-9);
+        }
+        let iso = Iso3::new(Vec3::new(tr[0], tr[1], tr[2]), Vec3::new(rot[0], rot[1], rot[2]));
+        let frame = BodyFrame { time: 0.0, positions: m.positions.iter().map(|p| iso.rotation * p + iso.translation.vector).collect(), velocities: vec![] };
+        body.set_frame(&frame).unwrap();
+        for (p, b) in pts.iter().zip(&bound) {
+            let expected = iso.rotation * p + iso.translation.vector;
+            prop_assert!((b.position(&body) - expected).norm() < 1e-9);
+        }
+    }
 }

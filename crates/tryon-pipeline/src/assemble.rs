@@ -6,12 +6,13 @@ use crate::real;
 use crate::scene::{BodyKind, CollisionMethod, GarmentKind, IntegratorName, MotionKind, Scene};
 use body_collide::{
     BodyError, BodyFollower, BodyMesh, ExactCollider, FollowParams, Mannequin,
-    NearestVertexCollider, SkinnedBody,
+    NearestVertexCollider, SkinnedBody, SurfaceBinding,
 };
-use cloth_dyn::{BuildClothError, ClothModel, ClothParams, ClothSim, IntegratorKind};
+use cloth_dyn::{BuildClothError, ClothModel, ClothParams, ClothSim, Handle, IntegratorKind};
 use garment_fit::{DressParams, PatternError, SkirtParams};
 use mocap_retarget::{ArmRaise, ClipError, Walk, WalkParams};
 use thiserror::Error;
+use tryon_core::frames::BodyFrame;
 use tryon_core::math::{Real, Vec3};
 use tryon_core::measure::{MeasureError, Measurements};
 use tryon_core::mesh::{PolyMesh, grid_xz};
@@ -36,6 +37,8 @@ pub enum AssembleError {
     Motion(#[from] ClipError),
     #[error(transparent)]
     Asset(#[from] crate::real::AssetError),
+    #[error("garment mesh: {0}")]
+    GarmentTopology(#[from] tryon_core::topology::TopologyError),
 }
 
 /// The body as the pipeline drives it.
@@ -58,6 +61,35 @@ impl std::fmt::Debug for BodyDriver {
     }
 }
 
+/// Garment vertices of elastic bands, each bound to the body's surface and driven there as a
+/// kinematic handle of the cloth (handles `first_handle..` of the cloth model, in this order).
+#[derive(Clone, Debug)]
+pub struct Bands {
+    pub vertices: Vec<u32>,
+    pub bindings: Vec<SurfaceBinding>,
+    pub first_handle: usize,
+    /// The body's current shape, on which the bindings are evaluated.
+    pub body: BodyMesh,
+}
+
+impl Bands {
+    /// Moves every band handle to its binding on the body's new shape.
+    pub fn update(&mut self, frame: &BodyFrame, handles: &mut [cloth_dyn::Handle]) {
+        if self.body.set_frame(frame).is_err() {
+            return;
+        }
+        for (k, b) in self.bindings.iter().enumerate() {
+            let p = b.position(&self.body);
+            if let Some(h) = handles.get_mut(self.first_handle + k)
+                && tryon_core::math::is_finite(&p)
+            {
+                h.path.clear();
+                h.path.push((0.0, p));
+            }
+        }
+    }
+}
+
 /// A scene ready to run.
 #[derive(Debug)]
 pub struct Pipeline {
@@ -73,6 +105,8 @@ pub struct Pipeline {
     pub placed_moved: usize,
     /// Vertices of small separate pieces (pockets, patches) attached to the piece beneath.
     pub attachments: Vec<garment_fit::Attachment>,
+    /// Elastic bands bound to the body (waistbands, collars, cuffs), when the scene has any.
+    pub bands: Option<Bands>,
     pub coarse: CoarseLoop,
     /// The exact referee judging penetration (always the body's true surface, no skin).
     pub referee: ExactCollider,
@@ -314,6 +348,39 @@ impl Pipeline {
         };
         // The referee judges the true surface.
         let referee = ExactCollider::new(&body_mesh, 0.0)?;
+        // Elastic bands: border loops lying on the body grip it.
+        let band_gap = g.band_gap.unwrap_or(if g.kind == GarmentKind::Mhclo {
+            0.006
+        } else {
+            0.0
+        });
+        let bands = if band_gap > 0.0 && fx.body_collision != CollisionMethod::None {
+            let loops = garment_fit::boundary_loops(&garment)?;
+            let attached: Vec<u32> = attachments.iter().map(|a| a.vertex).collect();
+            let mut vertices = garment_fit::select_bands(&loops, 8, band_gap, |v| {
+                referee
+                    .project(&garment.positions[v as usize])
+                    .map_or(Real::INFINITY, |p| p.distance)
+            });
+            vertices.retain(|v| attached.binary_search(v).is_err());
+            let body = BodyMesh::new(&body_mesh)?;
+            let mut kept = Vec::new();
+            let mut bindings = Vec::new();
+            for v in vertices {
+                if let Some(b) = SurfaceBinding::bind(&body, &garment.positions[v as usize]) {
+                    kept.push(v);
+                    bindings.push(b);
+                }
+            }
+            (!kept.is_empty()).then_some(Bands {
+                vertices: kept,
+                bindings,
+                first_handle: 0,
+                body,
+            })
+        } else {
+            None
+        };
 
         // Cloth: material from the garment's resolution, then the scene's overrides and effects.
         let c = &scene.cloth;
@@ -356,7 +423,16 @@ impl Pipeline {
             IntegratorName::SymplecticEuler => IntegratorKind::SymplecticEuler,
         };
         let kinematic: Vec<u32> = attachments.iter().map(|a| a.vertex).collect();
-        let model = ClothModel::build_with_kinematic(&garment, &p, vec![], &kinematic)?;
+        let handles: Vec<Handle> = bands.as_ref().map_or(Vec::new(), |b| {
+            b.vertices
+                .iter()
+                .map(|&v| Handle {
+                    particle: v,
+                    path: vec![(0.0, garment.positions[v as usize])],
+                })
+                .collect()
+        });
+        let model = ClothModel::build_with_kinematic(&garment, &p, handles, &kinematic)?;
         let sim = ClothSim::new(model, p, kind);
         let collider: Box<dyn Collider> = match fx.body_collision {
             CollisionMethod::NearestVertex => {
@@ -375,6 +451,9 @@ impl Pipeline {
         }
         if moving && fx.body_collision != CollisionMethod::None {
             stages.push("collider_update");
+        }
+        if bands.is_some() && moving {
+            stages.push("bands");
         }
         stages.push("cloth");
         if !attachments.is_empty() {
@@ -396,6 +475,7 @@ impl Pipeline {
             garment,
             placed_moved,
             attachments,
+            bands,
             coarse,
             referee,
             mannequin,

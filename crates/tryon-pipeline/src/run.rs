@@ -268,6 +268,9 @@ impl Pipeline {
                 timers.time("collider_update", || c.collider.update(body_frame));
             }
         }
+        if skinned && let Some(b) = &mut self.bands {
+            timers.time("bands", || b.update(body_frame, &mut c.sim.model.handles));
+        }
         let report = timers.time("cloth", || {
             c.sim.step_frame(&mut c.frame, dt, c.collider.as_mut())
         });
