@@ -8,7 +8,7 @@ use parry3d_f64::shape::{TriMesh, TriMeshFlags, TrianglePointLocation};
 use tryon_core::frames::{BodyFrame, Contact};
 use tryon_core::math::{Real, Vec3};
 use tryon_core::mesh::PolyMesh;
-use tryon_core::stages::Collider;
+use tryon_core::stages::{Collider, Probe};
 
 /// Exact point-mesh collider (the referee).
 #[derive(Clone)]
@@ -130,6 +130,24 @@ impl Collider for ExactCollider {
 
     fn signed_distance(&self, p: &Vec3) -> Option<Real> {
         self.project(p).map(|pr| pr.distance)
+    }
+
+    fn probe(&mut self, points: &[Vec3], which: &[u32], out: &mut Vec<Probe>) {
+        out.clear();
+        for &k in which {
+            let p = points[k as usize];
+            out.push(match self.project(&p) {
+                Some(pr) => Probe {
+                    distance: pr.distance,
+                    normal: if pr.distance.abs() > 1e-12 {
+                        (p - pr.point) / pr.distance
+                    } else {
+                        self.body.face_normals[pr.face as usize]
+                    },
+                },
+                None => Probe::FAR,
+            });
+        }
     }
 }
 

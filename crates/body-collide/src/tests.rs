@@ -205,4 +205,27 @@ proptest! {
             prop_assert!((b.position(&body) - expected).norm() < 1e-9);
         }
     }
+
+    /// The tracker's probes agree with the referee in sign wherever the referee is clear of the
+    /// surface, and report a unit normal; the referee's own probes match its signed distance.
+    #[test]
+    fn probes_agree_with_the_referee(m in body_strategy(), s in seeds()) {
+        let mut referee = ExactCollider::new(&m, 0.0).unwrap();
+        let mut tracker = NearestVertexCollider::new(&m, 0.0).unwrap();
+        let pts = points_near(&m, &s);
+        let which: Vec<u32> = (0..pts.len() as u32).rev().collect();
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        tracker.probe(&pts, &which, &mut a);
+        referee.probe(&pts, &which, &mut b);
+        prop_assert_eq!(a.len(), which.len());
+        for ((k, pa), pb) in which.iter().zip(&a).zip(&b) {
+            let d = referee.signed_distance(&pts[*k as usize]).unwrap();
+            prop_assert!((pb.distance - d).abs() < 1e-12);
+            if d.abs() > 1e-3 {
+                prop_assert_eq!(pa.distance < 0.0, d < 0.0, "point {}: tracker {}, referee {}", k, pa.distance, d);
+            }
+            // Far from the body (outside its culling box) a probe is FAR, with no normal.
+            prop_assert!(pa.distance == Real::INFINITY || (pa.normal.norm() - 1.0).abs() < 1e-9);
+        }
+    }
 }

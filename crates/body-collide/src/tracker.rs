@@ -12,7 +12,7 @@ use tryon_core::math::{Real, Vec3, closest_point_on_triangle};
 /// concave crease (m).
 const CREASE_REACH: Real = 0.05;
 use tryon_core::mesh::PolyMesh;
-use tryon_core::stages::Collider;
+use tryon_core::stages::{Collider, Probe};
 
 /// P1's nearest-vertex tracking collider.
 #[derive(Clone, Debug)]
@@ -26,6 +26,8 @@ pub struct NearestVertexCollider {
     pub cull_margin: Real,
     /// Body shape updates rejected for a wrong vertex count.
     pub rejected_frames: u32,
+    /// Nearest body vertex of each probed point (`probe` keeps its own cache).
+    pub probe_nearest: Vec<u32>,
     bounds: (Vec3, Vec3),
 }
 
@@ -40,6 +42,7 @@ impl NearestVertexCollider {
             nearest: Vec::new(),
             cull_margin: 0.05,
             rejected_frames: 0,
+            probe_nearest: Vec::new(),
             bounds,
         })
     }
@@ -177,6 +180,50 @@ impl Collider for NearestVertexCollider {
                 depth: (-height).max(0.0),
                 body_velocity: self.body.velocity_at(f as usize, bary),
             });
+        }
+    }
+
+    /// Tracks each listed point's nearest vertex (hill-climb from its last one), then P1's inside
+    /// test there (and the crease test); outside points get their distance to the vertex's fan.
+    fn probe(&mut self, points: &[Vec3], which: &[u32], out: &mut Vec<Probe>) {
+        out.clear();
+        if self.probe_nearest.len() != points.len() {
+            self.probe_nearest = points
+                .iter()
+                .map(|p| self.body.nearest_vertex_brute(p))
+                .collect();
+        }
+        for &k in which {
+            let p = &points[k as usize];
+            if !self.near_bounds(p) {
+                out.push(Probe::FAR);
+                continue;
+            }
+            let v = self.body.climb(p, self.probe_nearest[k as usize]);
+            self.probe_nearest[k as usize] = v;
+            if let Some((f, h)) = self.inside(p, v) {
+                out.push(Probe {
+                    distance: h,
+                    normal: self.body.face_normals[f as usize],
+                });
+            } else if let Some((_, h, n)) = self.inside_crease(p, v, 0.0) {
+                out.push(Probe {
+                    distance: h,
+                    normal: n,
+                });
+            } else {
+                let (f, q, _) = self.body.closest_on_fan(p, v);
+                let d = p - q;
+                let n = d.norm();
+                out.push(Probe {
+                    distance: n,
+                    normal: if n > 1e-12 {
+                        d / n
+                    } else {
+                        self.body.face_normals[f as usize]
+                    },
+                });
+            }
         }
     }
 

@@ -98,10 +98,37 @@ pub struct FineVertexSource {
 }
 
 /// The fine surface built from the coarse cloth.
+///
+/// Layout: every coarse triangle `(a, b, c)` (the coarse mesh's triangulated view) carries a
+/// triangular lattice of `segments` steps per side. Lattice point `(i, j)`, `i + j <= segments`, has
+/// barycentric weights `((n - i - j) / n, i / n, j / n)` on `(a, b, c)`, so `(0, 0)` is `a`, `(n, 0)`
+/// is `b` and `(0, n)` is `c`; its fine vertex is `lattice[t * lattice_len(n) + lattice_index(n, i, j)]`.
+/// Fine vertices `0..coarse count` are the coarse vertices themselves; a vertex on a coarse edge
+/// exists once and is shared by the lattices of both triangles along that edge.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct FineSurface {
     pub positions: Vec<Vec3>,
+    /// Unit normals (the refiner's interpolated normals until a detail model blends them).
     pub normals: Vec<Vec3>,
     pub triangles: Vec<[u32; 3]>,
     pub sources: Vec<FineVertexSource>,
+    /// Lattice steps along each coarse edge (1 = the coarse mesh itself).
+    pub segments: u32,
+    /// The coarse triangles the lattices are laid on.
+    pub coarse_triangles: Vec<[u32; 3]>,
+    /// Fine vertex of every lattice point of every coarse triangle (see the type's docs).
+    pub lattice: Vec<u32>,
+}
+
+/// Number of points in a triangular lattice of `n` steps per side.
+pub fn lattice_len(n: u32) -> usize {
+    let n = n as usize;
+    (n + 1) * (n + 2) / 2
+}
+
+/// Position of lattice point `(i, j)` (`i + j <= n`) in a lattice's point list: rows of constant `j`,
+/// each running over `i = 0..=n - j`.
+pub fn lattice_index(n: u32, i: u32, j: u32) -> usize {
+    let (n, i, j) = (n as usize, i as usize, j as usize);
+    j * (n + 1) - j * j.saturating_sub(1) / 2 + i
 }

@@ -88,3 +88,20 @@ mod tests {
         assert!((q - Vec3::new(0.5, 0.5, 0.0)).norm() < 1e-15);
     }
 }
+
+/// Area-weighted unit vertex normals of a triangle mesh into `out` (resized); a vertex with no
+/// area around it gets +y.
+pub fn vertex_normals(positions: &[Vec3], triangles: &[[u32; 3]], out: &mut Vec<Vec3>) {
+    out.clear();
+    out.resize(positions.len(), Vec3::zeros());
+    for t in triangles {
+        let [a, b, c] = t.map(|v| v as usize);
+        let n = (positions[b] - positions[a]).cross(&(positions[c] - positions[a]));
+        out[a] += n;
+        out[b] += n;
+        out[c] += n;
+    }
+    for n in out.iter_mut() {
+        *n = n.try_normalize(1e-30).unwrap_or(Vec3::y());
+    }
+}

@@ -34,6 +34,52 @@ pub trait Collider {
     fn resolve(&mut self, points: &mut [Vec3], contacts: &mut Vec<Contact>);
     /// Signed distance from `p` to the body surface (negative inside), if the collider can say.
     fn signed_distance(&self, p: &Vec3) -> Option<Real>;
+    /// Probes the points listed in `which` (indices into `points`, which is the same slice on every
+    /// call, as for `resolve`): one entry per listed point, in order, written to `out` (cleared
+    /// first). The default works from `signed_distance` with a central-difference normal; colliders
+    /// that track points override it.
+    fn probe(&mut self, points: &[Vec3], which: &[u32], out: &mut Vec<Probe>) {
+        out.clear();
+        let h = 1e-4;
+        for &k in which {
+            let p = points[k as usize];
+            let Some(d) = self.signed_distance(&p) else {
+                out.push(Probe::FAR);
+                continue;
+            };
+            let mut g = Vec3::zeros();
+            for a in 0..3 {
+                let mut e = Vec3::zeros();
+                e[a] = h;
+                let (Some(f1), Some(f0)) =
+                    (self.signed_distance(&(p + e)), self.signed_distance(&(p - e)))
+                else {
+                    break;
+                };
+                g[a] = (f1 - f0) / (2.0 * h);
+            }
+            out.push(Probe {
+                distance: d,
+                normal: g.try_normalize(1e-12).unwrap_or(Vec3::zeros()),
+            });
+        }
+    }
+}
+
+/// What a collider says about one point: signed distance to the body (negative inside) and the
+/// body's outward unit normal at the closest point (zero when unknown).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Probe {
+    pub distance: Real,
+    pub normal: Vec3,
+}
+
+impl Probe {
+    /// A point the collider knows nothing about: infinitely far outside.
+    pub const FAR: Probe = Probe {
+        distance: Real::INFINITY,
+        normal: Vec3::new(0.0, 0.0, 0.0),
+    };
 }
 
 /// One frame of coarse cloth dynamics against a collider.
@@ -152,6 +198,9 @@ impl Refiner for FlatRefiner {
         out.normals.extend_from_slice(coarse_normals);
         if out.triangles != self.triangles {
             out.triangles.clone_from(&self.triangles);
+            out.segments = 1;
+            out.coarse_triangles.clone_from(&self.triangles);
+            out.lattice = self.triangles.iter().flatten().copied().collect();
             out.sources = vec![FineVertexSource::default(); coarse_positions.len()];
             for (fi, t) in self.triangles.iter().enumerate() {
                 for (k, &v) in t.iter().enumerate() {
