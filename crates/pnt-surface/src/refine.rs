@@ -20,7 +20,11 @@ pub enum RefineError {
     #[error("coarse mesh: {0}")]
     Mesh(#[from] MeshError),
     #[error("refine level {level} would make {count} fine vertices, more than the {limit} allowed")]
-    TooMany { level: u8, count: usize, limit: usize },
+    TooMany {
+        level: u8,
+        count: usize,
+        limit: usize,
+    },
 }
 
 /// Most fine vertices a refiner will build.
@@ -116,7 +120,11 @@ impl PnRefiner {
             for j in 0..=n {
                 for i in 0..=n - j {
                     let k = n - i - j;
-                    let bary = [k as Real / n as Real, i as Real / n as Real, j as Real / n as Real];
+                    let bary = [
+                        k as Real / n as Real,
+                        i as Real / n as Real,
+                        j as Real / n as Real,
+                    ];
                     // Which coarse edge (if any) holds the point, as (from, to, steps from `from`).
                     let on_edge = if (i, j) == (0, 0) {
                         lat[lattice_index(n, i, j)] = t[0];
@@ -239,7 +247,12 @@ impl PnRefiner {
 }
 
 impl Refiner for PnRefiner {
-    fn refine(&mut self, coarse_positions: &[Vec3], coarse_normals: &[Vec3], out: &mut FineSurface) {
+    fn refine(
+        &mut self,
+        coarse_positions: &[Vec3],
+        coarse_normals: &[Vec3],
+        out: &mut FineSurface,
+    ) {
         self.evaluate(coarse_positions, coarse_normals, out);
     }
 }

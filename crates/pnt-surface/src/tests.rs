@@ -21,7 +21,11 @@ fn a_patch_interpolates_its_corners_and_corner_normals() {
         Vec3::new(1.0, 0.2, 0.0),
         Vec3::new(0.1, 0.0, 1.0),
     ];
-    let n = [unit(0.1, 1.0, 0.0), unit(-0.3, 1.0, 0.1), unit(0.0, 1.0, -0.4)];
+    let n = [
+        unit(0.1, 1.0, 0.0),
+        unit(-0.3, 1.0, 0.1),
+        unit(0.0, 1.0, -0.4),
+    ];
     let patch = PnPatch::new(p, n);
     for k in 0..3 {
         let mut b = [0.0; 3];
@@ -43,16 +47,30 @@ fn flat_input_with_equal_normals_stays_flat() {
     let mut fine = FineSurface::default();
     r.evaluate(&mesh.positions, &normals, &mut fine);
     for (p, n) in fine.positions.iter().zip(&fine.normals) {
-        assert!((p.y - 0.3).abs() < 1e-14, "fine vertex off the plane: {p:?}");
+        assert!(
+            (p.y - 0.3).abs() < 1e-14,
+            "fine vertex off the plane: {p:?}"
+        );
         assert!((n - Vec3::y()).norm() < 1e-14);
     }
     // And inside the coarse footprint.
     let (lo, hi) = mesh.positions.iter().fold(
-        (Vec3::repeat(Real::INFINITY), Vec3::repeat(Real::NEG_INFINITY)),
+        (
+            Vec3::repeat(Real::INFINITY),
+            Vec3::repeat(Real::NEG_INFINITY),
+        ),
         |(lo, hi), p| (lo.inf(p), hi.sup(p)),
     );
-    assert!(fine.positions.iter().all(|p| p.x >= lo.x - 1e-12 && p.x <= hi.x + 1e-12));
-    assert!(fine.positions.iter().all(|p| p.z >= lo.z - 1e-12 && p.z <= hi.z + 1e-12));
+    assert!(
+        fine.positions
+            .iter()
+            .all(|p| p.x >= lo.x - 1e-12 && p.x <= hi.x + 1e-12)
+    );
+    assert!(
+        fine.positions
+            .iter()
+            .all(|p| p.z >= lo.z - 1e-12 && p.z <= hi.z + 1e-12)
+    );
 }
 
 /// Every coarse edge shared by two triangles: both patches give the same points along it, and the
@@ -84,12 +102,26 @@ fn neighbouring_patches_share_their_edge_vertices_exactly() {
                 (t[2], t[0], 0, n - s),
             ] {
                 let k = n - i - j;
-                let bary = [k as Real / n as Real, i as Real / n as Real, j as Real / n as Real];
+                let bary = [
+                    k as Real / n as Real,
+                    i as Real / n as Real,
+                    j as Real / n as Real,
+                ];
                 let q = patch.position(bary);
                 let v = fine.lattice[f * per + lattice_index(n, i, j)];
                 // Key: edge from the smaller end, steps from it.
-                let steps = if (a, b) == (t[0], t[1]) { i } else if (a, b) == (t[1], t[2]) { j } else { n - j };
-                let key = if a < b { (a, b, steps) } else { (b, a, n - steps) };
+                let steps = if (a, b) == (t[0], t[1]) {
+                    i
+                } else if (a, b) == (t[1], t[2]) {
+                    j
+                } else {
+                    n - j
+                };
+                let key = if a < b {
+                    (a, b, steps)
+                } else {
+                    (b, a, n - steps)
+                };
                 if let Some((v0, q0)) = seen.insert(key, (v, q)) {
                     assert_eq!(v0, v, "edge {key:?} has two fine vertices");
                     assert!((q0 - q).norm() < 1e-12, "edge {key:?}: {q0:?} vs {q:?}");
@@ -99,7 +131,11 @@ fn neighbouring_patches_share_their_edge_vertices_exactly() {
             }
         }
     }
-    assert_eq!(shared, 120 * 7, "every interior edge point of the 120 edges seen twice");
+    assert_eq!(
+        shared,
+        120 * 7,
+        "every interior edge point of the 120 edges seen twice"
+    );
     // Watertight: the fine mesh of a closed coarse mesh is closed.
     let fm = PolyMesh::from_triangles(fine.positions.clone(), &fine.triangles).unwrap();
     assert!(Topology::build(&fm).unwrap().is_closed());
@@ -123,7 +159,11 @@ fn counts_levels_and_the_coarse_vertices_come_first() {
         for l in 0..=level as usize {
             let m = 1usize << l;
             let upto = 42 + 120 * (m - 1) + 80 * (m - 1) * m.saturating_sub(2) / 2;
-            assert_eq!(total + by_level[l], upto, "level {level}, vertices of level {l}");
+            assert_eq!(
+                total + by_level[l],
+                upto,
+                "level {level}, vertices of level {l}"
+            );
             total = upto;
         }
     }
@@ -160,7 +200,10 @@ fn pn_triangles_approximate_a_sphere_better_than_flat_ones() {
     let (tris, _) = mesh.triangulate();
     let mut flat = 0.0;
     for t in &tris {
-        let c = (mesh.positions[t[0] as usize] + mesh.positions[t[1] as usize] + mesh.positions[t[2] as usize]) / 3.0;
+        let c = (mesh.positions[t[0] as usize]
+            + mesh.positions[t[1] as usize]
+            + mesh.positions[t[2] as usize])
+            / 3.0;
         flat = Real::max(flat, 1.0 - c.norm());
     }
     assert!(pn < flat / 4.0, "PN radial error {pn}, flat {flat}");

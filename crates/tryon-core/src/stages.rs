@@ -51,9 +51,10 @@ pub trait Collider {
             for a in 0..3 {
                 let mut e = Vec3::zeros();
                 e[a] = h;
-                let (Some(f1), Some(f0)) =
-                    (self.signed_distance(&(p + e)), self.signed_distance(&(p - e)))
-                else {
+                let (Some(f1), Some(f0)) = (
+                    self.signed_distance(&(p + e)),
+                    self.signed_distance(&(p - e)),
+                ) else {
                     break;
                 };
                 g[a] = (f1 - f0) / (2.0 * h);
