@@ -5,7 +5,7 @@
 use body_collide::{ExactCollider, penetration_depths};
 use std::path::{Path, PathBuf};
 use tryon_core::math::Real;
-use tryon_pipeline::{Pipeline, Scene, SceneError};
+use tryon_pipeline::{DEMO_SCENE, Pipeline, Scene, SceneError};
 
 fn scratch_dir(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("tryon-test-{}-{name}", std::process::id()));
@@ -224,4 +224,80 @@ fn the_demo_is_deterministic() {
     };
     let (a, b) = (run(), run());
     assert_eq!(a, b);
+}
+
+/// P1 section 4 on the demo: after fine penetration removal no fine vertex is more than 0.5 mm
+/// inside the body by the exact referee; the surface stages appear only when they run; wrinkles
+/// shorten the gap between the fine path along compressed coarse edges and their rest length.
+#[test]
+fn the_demo_surface_stays_out_of_the_body_and_wrinkles_restore_length() {
+    let with = |extra: &str| {
+        let text = DEMO_SCENE.replace("wrinkles = false\n", extra);
+        Scene::parse(&text, Path::new("demo.toml")).unwrap()
+    };
+    let frames = 45;
+    let mut errors = Vec::new();
+    for (extra, stages) in [
+        (
+            "wrinkles = false\n",
+            vec!["refine", "fine_collision", "normals"],
+        ),
+        (
+            "wrinkles = true\n",
+            vec!["refine", "wrinkle", "fine_collision", "normals"],
+        ),
+    ] {
+        let mut p = Pipeline::new(with(extra)).unwrap();
+        for s in ["refine", "wrinkle", "fine_collision", "normals"] {
+            assert_eq!(
+                p.stages.contains(&s),
+                stages.contains(&s),
+                "{extra}: {:?}",
+                p.stages
+            );
+        }
+        let run = p.run(Some(frames), |_, _| {});
+        let fine = run.stats.counts.fine_vertices.unwrap();
+        assert!(
+            fine > 5000 && fine < 6000,
+            "{fine} fine vertices at level 2"
+        );
+        assert_eq!(run.frames[1].garment.len(), fine);
+        assert!(
+            run.stats.metrics.max_penetration_m <= 0.0005,
+            "{extra}: a fine vertex {} m inside",
+            run.stats.metrics.max_penetration_m
+        );
+        for s in &stages {
+            assert!(run.stats.stages.contains_key(*s), "stage {s} not timed");
+        }
+        errors.push(run.stats.metrics.length_error.unwrap());
+    }
+    assert!(
+        errors[1] < errors[0],
+        "length error with wrinkles {} vs without {}",
+        errors[1],
+        errors[0]
+    );
+    // refine = 0: no surface stage at all, the coarse mesh is the output.
+    let mut p = Pipeline::new(with("wrinkles = true\n").clone_with_refine(0)).unwrap();
+    assert!(
+        !p.stages
+            .iter()
+            .any(|s| ["refine", "wrinkle", "fine_collision", "normals"].contains(s))
+    );
+    let run = p.run(Some(2), |_, _| {});
+    assert_eq!(run.stats.counts.fine_vertices, None);
+    assert_eq!(run.frames[1].garment.len(), p.garment.positions.len());
+}
+
+trait WithRefine {
+    fn clone_with_refine(self, level: u8) -> Scene;
+}
+
+impl WithRefine for Scene {
+    fn clone_with_refine(mut self, level: u8) -> Scene {
+        self.effects.refine = level;
+        self
+    }
 }

@@ -39,6 +39,10 @@ pub enum AssembleError {
     Asset(#[from] crate::real::AssetError),
     #[error("garment mesh: {0}")]
     GarmentTopology(#[from] tryon_core::topology::TopologyError),
+    #[error("refine: {0}")]
+    Refine(#[from] pnt_surface::RefineError),
+    #[error("surface detail: {0}")]
+    Detail(#[from] wrinkle::DetailError),
 }
 
 /// The body as the pipeline drives it.
@@ -108,6 +112,8 @@ pub struct Pipeline {
     /// Elastic bands bound to the body (waistbands, collars, cuffs), when the scene has any.
     pub bands: Option<Bands>,
     pub coarse: CoarseLoop,
+    /// The surface stages (P1 section 4), when the scene refines.
+    pub fine: Option<crate::fine::FineStage>,
     /// The exact referee judging penetration (always the body's true surface, no skin).
     pub referee: ExactCollider,
     /// The mannequin, when the body is one (for exports: skeleton and weights).
@@ -459,6 +465,70 @@ impl Pipeline {
         if !attachments.is_empty() {
             stages.push("attach_pieces");
         }
+        // The surface stages (P1 section 4).
+        let fine = if fx.refine > 0 {
+            let refiner = pnt_surface::PnRefiner::new(&garment, fx.refine)?;
+            let (tris, _) = garment.triangulate();
+            let mut normals = Vec::new();
+            tryon_core::math::vertex_normals(&garment.positions, &tris, &mut normals);
+            // Which way the garment's triangles wind: normals should leave the body.
+            let near: Vec<u32> = (0..garment.positions.len() as u32).collect();
+            let mut probes = Vec::new();
+            let mut r = ExactCollider::new(&body_mesh, 0.0)?;
+            r.probe(&garment.positions, &near, &mut probes);
+            let facing: Real = probes
+                .iter()
+                .zip(&normals)
+                .filter(|(p, _)| p.distance.abs() < 0.03)
+                .map(|(p, n)| p.normal.dot(n))
+                .sum();
+            let orientation = if facing < 0.0 { -1.0 } else { 1.0 };
+            let mut surface = tryon_core::frames::FineSurface::default();
+            let mut flipped = normals.clone();
+            if orientation < 0.0 {
+                flipped.iter_mut().for_each(|n| *n = -*n);
+            }
+            let mut rf = refiner.clone();
+            rf.evaluate(&garment.positions, &flipped, &mut surface);
+            let params = wrinkle::DetailParams {
+                wrinkles: fx.wrinkles,
+                fine_collision: fx.fine_collision && fx.body_collision != CollisionMethod::None,
+                blend_normals: fx.blend_normals,
+                k_out_plane: fx.k_out_plane,
+                h_normal: fx.h_normal,
+                dt: 1.0 / scene.scene.fps,
+                skin: fx.fine_skin,
+                margin: fx.fine_margin,
+                max_fine_stretch: fx.max_fine_stretch,
+            };
+            let detail = wrinkle::Detail::new(&surface, &garment.positions, params.clone())?;
+            let fine_collider: Option<Box<dyn Collider>> = if params.fine_collision {
+                Some(match fx.body_collision {
+                    CollisionMethod::Exact => Box::new(ExactCollider::new(&body_mesh, 0.0)?),
+                    _ => Box::new(NearestVertexCollider::new(&body_mesh, 0.0)?),
+                })
+            } else {
+                None
+            };
+            stages.push("refine");
+            if params.wrinkles {
+                stages.push("wrinkle");
+            }
+            if params.fine_collision {
+                stages.push("fine_collision");
+            }
+            if params.blend_normals && (params.wrinkles || params.fine_collision) {
+                stages.push("normals");
+            }
+            Some(crate::fine::FineStage::new(
+                refiner,
+                detail,
+                fine_collider,
+                orientation,
+            ))
+        } else {
+            None
+        };
         stages.push("referee");
         let coarse = CoarseLoop::new(sim, collider, follower);
         let fps = scene.scene.fps;
@@ -477,6 +547,7 @@ impl Pipeline {
             attachments,
             bands,
             coarse,
+            fine,
             referee,
             mannequin,
             frames,

@@ -7,6 +7,7 @@ pub mod assemble;
 pub mod coarse;
 pub mod drape;
 pub mod export;
+pub mod fine;
 pub mod metrics;
 pub mod real;
 pub mod run;

@@ -40,6 +40,9 @@ pub struct Counts {
     pub springs: usize,
     pub body_vertices: usize,
     pub body_triangles: usize,
+    /// Vertices of the refined surface (when the scene refines).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fine_vertices: Option<usize>,
 }
 
 /// Accuracy and robustness over the run, judged by the exact referee.
@@ -56,6 +59,10 @@ pub struct Metrics {
     pub non_finite_events: u32,
     pub substep_retries: u32,
     pub rollbacks: u32,
+    /// Mean over frames of the length restoration error over compressed coarse edges,
+    /// |fine path length - rest| / rest (when the scene refines).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub length_error: Option<Real>,
     /// Garment vertices moved out of the body when placing it on the rest pose.
     pub placement_moved: usize,
 }
@@ -149,7 +156,7 @@ pub struct Timers {
 }
 
 impl Timers {
-    fn time<T>(&mut self, name: &'static str, f: impl FnOnce() -> T) -> T {
+    pub(crate) fn time<T>(&mut self, name: &'static str, f: impl FnOnce() -> T) -> T {
         let t0 = Instant::now();
         let r = f();
         *self.frame.entry(name).or_default() += t0.elapsed().as_secs_f64() * 1e3;
@@ -208,6 +215,17 @@ impl Pipeline {
             body.pose(&st.pose, &mut st.body_frame);
         }
         st.prev_root = root_transform(st.root, &st.root_rest, &st.pose);
+        if let Some(fine) = &mut self.fine {
+            let skinned = matches!(self.driver, BodyDriver::Skinned { .. });
+            let mut scratch = Timers::default();
+            fine.run(
+                &self.coarse.frame,
+                skinned.then_some(&st.body_frame),
+                &mut scratch,
+            );
+            fine.length_error_sum = 0.0;
+            fine.length_frames = 0;
+        }
         st
     }
 
@@ -286,7 +304,18 @@ impl Pipeline {
         if let Some(f) = &mut c.follower {
             timers.time("follow_body", || f.record(&c.frame.positions));
         }
+        if let Some(fine) = &mut self.fine {
+            fine.run(&c.frame, skinned.then_some(&*body_frame), timers);
+        }
         report
+    }
+
+    /// The garment as output: the fine surface when the scene refines, else the coarse cloth.
+    pub fn output_garment(&self) -> &[Vec3] {
+        match &self.fine {
+            Some(f) => &f.surface.positions,
+            None => &self.coarse.frame.positions,
+        }
     }
 
     /// Runs `frames` output frames (the scene's count when `None`), calling `progress(done, total)`
@@ -302,7 +331,10 @@ impl Pipeline {
         let s = &model.springs;
         let edges: Vec<[u32; 2]> = model.structural.clone().map(|k| [s.i[k], s.j[k]]).collect();
         let rest: Vec<Real> = model.structural.clone().map(|k| s.rest[k]).collect();
-        let (garment_triangles, _) = self.garment.triangulate();
+        let garment_triangles = match &self.fine {
+            Some(f) => f.refiner.triangles.clone(),
+            None => self.garment.triangulate().0,
+        };
         let (body_triangles, _) = self.body_mesh.triangulate();
         let mut stats = Stats {
             scene: self.scene.scene.name.clone(),
@@ -317,6 +349,7 @@ impl Pipeline {
                 springs: s.len(),
                 body_vertices: self.body_mesh.positions.len(),
                 body_triangles: body_triangles.len(),
+                fine_vertices: self.fine.as_ref().map(|f| f.refiner.fine_vertices()),
             },
             ..Stats::default()
         };
@@ -327,7 +360,7 @@ impl Pipeline {
         let mut st = self.start();
         out_frames.push(FrameRecord {
             time: 0.0,
-            garment: self.coarse.frame.positions.clone(),
+            garment: self.output_garment().to_vec(),
             pose: skinned.then(|| st.pose.clone()),
         });
         let mut total = StepReport::default();
@@ -337,6 +370,10 @@ impl Pipeline {
             let t = k as Real * dt;
             let report = self.advance(&mut st, t, &mut timers);
             let (c, body_frame, pose) = (&self.coarse, &st.body_frame, &st.pose);
+            let output = match &self.fine {
+                Some(f) => &f.surface.positions,
+                None => &c.frame.positions,
+            };
             total.accumulate(&report);
             let referee = &mut self.referee;
             let (pen, (smax, smean)) = timers.time("referee", || {
@@ -344,7 +381,7 @@ impl Pipeline {
                     referee.update(body_frame);
                 }
                 (
-                    penetration(referee, &c.frame.positions),
+                    penetration(referee, output),
                     stretch(&edges, &rest, &c.frame.positions),
                 )
             });
@@ -363,7 +400,7 @@ impl Pipeline {
             });
             out_frames.push(FrameRecord {
                 time: t,
-                garment: c.frame.positions.clone(),
+                garment: output.clone(),
                 pose: skinned.then(|| pose.clone()),
             });
             timers.end_frame();
@@ -374,6 +411,9 @@ impl Pipeline {
         stats.metrics.non_finite_events = total.non_finite_events;
         stats.metrics.substep_retries = total.retries;
         stats.metrics.rollbacks = total.rollbacks;
+        if let Some(f) = &self.fine {
+            stats.metrics.length_error = Some(f.length_error_sum / f.length_frames.max(1) as Real);
+        }
         timers.end_frame();
         for (name, mut t) in timers.totals {
             t.ms_mean = t.sum / t.count.max(1) as Real;

@@ -237,6 +237,25 @@ pub struct EffectsSection {
     pub follow_body: bool,
     /// Velocity damping (1/s); 0 turns it off.
     pub velocity_damping: Real,
+    /// P1.4.1: PN-triangle refinement level, 2^level segments per coarse edge; 0 = the coarse
+    /// mesh is the output (and no surface stage runs).
+    pub refine: u8,
+    /// P1.4.2: raise fine vertices out of the body (when refine > 0 and the body collides).
+    pub fine_collision: bool,
+    /// P1.4.3: the wrinkle model (when refine > 0).
+    pub wrinkles: bool,
+    /// P1.4.4: blend normals by wrinkle height (when refine > 0 and wrinkles or fine collision run).
+    pub blend_normals: bool,
+    /// k_out-plane of P1 eqs. 10 and 12 (m/N).
+    pub k_out_plane: Real,
+    /// Height at which the deformed surface's normal takes over (m), P1 eq. 13.
+    pub h_normal: Real,
+    /// Distance fine vertices keep from the body (m).
+    pub fine_skin: Real,
+    /// Fine vertices within this distance of the body count as touching it (m).
+    pub fine_margin: Real,
+    /// Longest a fine edge may get through wrinkle height differences, over its reference length.
+    pub max_fine_stretch: Real,
 }
 
 impl Default for EffectsSection {
@@ -249,6 +268,15 @@ impl Default for EffectsSection {
             body_collision: CollisionMethod::NearestVertex,
             follow_body: true,
             velocity_damping: 0.2,
+            refine: 0,
+            fine_collision: true,
+            wrinkles: false,
+            blend_normals: true,
+            k_out_plane: 1.0,
+            h_normal: 0.005,
+            fine_skin: 0.001,
+            fine_margin: 0.01,
+            max_fine_stretch: 1.25,
         }
     }
 }
@@ -549,6 +577,26 @@ impl Scene {
         let e = &self.effects;
         range("effects", "air_drag", Some(e.air_drag), 0.0, 100.0)?;
         range("effects", "friction", Some(e.friction), 0.0, 5.0)?;
+        if e.refine > 4 {
+            return Err(bad("effects", "refine", e.refine.to_string(), "0..=4"));
+        }
+        range("effects", "k_out_plane", Some(e.k_out_plane), 0.0, 100.0)?;
+        range("effects", "h_normal", Some(e.h_normal), 1e-5, 1.0)?;
+        range("effects", "fine_skin", Some(e.fine_skin), 0.0, 0.05)?;
+        range(
+            "effects",
+            "fine_margin",
+            Some(e.fine_margin),
+            e.fine_skin,
+            0.2,
+        )?;
+        range(
+            "effects",
+            "max_fine_stretch",
+            Some(e.max_fine_stretch),
+            1.0,
+            3.0,
+        )?;
         range(
             "effects",
             "velocity_damping",
