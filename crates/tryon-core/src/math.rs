@@ -69,6 +69,23 @@ pub fn closest_point_on_triangle(p: &Vec3, a: &Vec3, b: &Vec3, c: &Vec3) -> (Vec
     (a + ab * v + ac * w, [1.0 - v - w, v, w])
 }
 
+/// Area-weighted unit vertex normals of a triangle mesh into `out` (resized); a vertex with no
+/// area around it gets +y.
+pub fn vertex_normals(positions: &[Vec3], triangles: &[[u32; 3]], out: &mut Vec<Vec3>) {
+    out.clear();
+    out.resize(positions.len(), Vec3::zeros());
+    for t in triangles {
+        let [a, b, c] = t.map(|v| v as usize);
+        let n = (positions[b] - positions[a]).cross(&(positions[c] - positions[a]));
+        out[a] += n;
+        out[b] += n;
+        out[c] += n;
+    }
+    for n in out.iter_mut() {
+        *n = n.try_normalize(1e-30).unwrap_or(Vec3::y());
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -86,22 +103,5 @@ mod tests {
         assert_eq!(w, [1.0, 0.0, 0.0]);
         let (q, _) = closest_point_on_triangle(&Vec3::new(1.0, 1.0, 0.0), &a, &b, &c);
         assert!((q - Vec3::new(0.5, 0.5, 0.0)).norm() < 1e-15);
-    }
-}
-
-/// Area-weighted unit vertex normals of a triangle mesh into `out` (resized); a vertex with no
-/// area around it gets +y.
-pub fn vertex_normals(positions: &[Vec3], triangles: &[[u32; 3]], out: &mut Vec<Vec3>) {
-    out.clear();
-    out.resize(positions.len(), Vec3::zeros());
-    for t in triangles {
-        let [a, b, c] = t.map(|v| v as usize);
-        let n = (positions[b] - positions[a]).cross(&(positions[c] - positions[a]));
-        out[a] += n;
-        out[b] += n;
-        out[c] += n;
-    }
-    for n in out.iter_mut() {
-        *n = n.try_normalize(1e-30).unwrap_or(Vec3::y());
     }
 }

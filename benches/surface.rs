@@ -1,0 +1,59 @@
+//! Criterion benchmark of P1 section 4's surface stages for about 11k fine vertices, single thread:
+//! a 27 x 27-particle square draped on a sphere (the drape scene's body), refined at level 2
+//! ((4 x 26 + 1)^2 = 11,025 fine vertices). Timed per frame: PN refinement, the wrinkle model,
+//! hierarchical fine collision (nearest-vertex tracking, including the fine collider's body update)
+//! and normal blending; `refine_collide` leaves the wrinkle model out. P1 measured 51.6 ms for its
+//! 10,912 vertices; the target here is 0.5 ms.
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use std::path::Path;
+use std::time::Duration;
+use tryon_core::frames::BodyFrame;
+use tryon_pipeline::run::Timers;
+use tryon_pipeline::{Pipeline, Scene};
+
+fn scene(wrinkles: bool) -> Pipeline {
+    let text = format!(
+        "[scene]\nname = \"surface\"\nfps = 60\nduration = 1.0\nsettle = 0.0\n\
+         [body]\nkind = \"sphere\"\nradius = 0.3\nsubdivisions = 4\n\
+         [garment]\nkind = \"square\"\nparticles = 27\nsize = 1.0\ndrop_height = 0.4\n\
+         [motion]\nkind = \"still\"\n\
+         [effects]\nfollow_body = false\nfriction = 0.3\nrefine = 2\nwrinkles = {wrinkles}\n"
+    );
+    let s = Scene::parse(&text, Path::new("surface.toml")).unwrap_or_else(|e| panic!("{e}"));
+    let mut p = Pipeline::new(s).unwrap_or_else(|e| panic!("{e}"));
+    // Untimed: drape for 40 frames so that the cloth lies on the sphere, folded around it.
+    let mut st = p.start();
+    let mut timers = Timers::default();
+    for k in 1..=40 {
+        p.advance(&mut st, k as f64 / p.fps, &mut timers);
+    }
+    p
+}
+
+fn surface(c: &mut Criterion) {
+    let mut group = c.benchmark_group("surface_11k");
+    group
+        .sample_size(30)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(4));
+    for (name, wrinkles) in [("refine_collide", false), ("all_stages", true)] {
+        let mut p = scene(wrinkles);
+        let body = BodyFrame {
+            time: 0.0,
+            positions: p.body_mesh.positions.clone(),
+            velocities: Vec::new(),
+        };
+        let fine = p.fine.as_mut().expect("the scene refines");
+        assert_eq!(fine.refiner.fine_vertices(), 11_025);
+        let coarse = p.coarse.frame.clone();
+        let mut timers = Timers::default();
+        group.bench_function(name, |b| {
+            b.iter(|| fine.run(&coarse, Some(&body), &mut timers));
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, surface);
+criterion_main!(benches);
