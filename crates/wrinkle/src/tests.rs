@@ -182,7 +182,6 @@ fn compression_wrinkles_and_restores_length() {
     };
     let (off, count, h_off, _) = run(false);
     let (on, count_on, h_on, fine) = run(true);
-    eprintln!("length error off {off:.4}, on {on:.4}; highest wrinkle {h_on:.4} m");
     assert_eq!(count, count_on);
     assert!(count > 10, "{count} compressed edges");
     assert_eq!(h_off, 0.0);
