@@ -160,6 +160,18 @@ fn bad_scene_files_name_the_key_and_the_line() {
         e.contains("bad.toml:7") && e.contains("motion.hip_deg"),
         "{e}"
     );
+    let e = err(&format!("{base}[effects]\nrefine = 9\n"));
+    assert!(
+        e.contains("bad.toml:6") && e.contains("effects.refine") && e.contains("0..=4"),
+        "{e}"
+    );
+    let e = err(&format!("{base}[effects]\nh_normal = 0.0\n"));
+    assert!(e.contains("effects.h_normal"), "{e}");
+    let e = err("[body]\nkind = \"mannequin\"\n[garment]\nkind = \"dress\"\nband_gap = -1\n");
+    assert!(
+        e.contains("bad.toml:5") && e.contains("garment.band_gap"),
+        "{e}"
+    );
     assert!(matches!(
         Scene::load(Path::new("/nonexistent/x.toml")),
         Err(SceneError::Io { .. })
