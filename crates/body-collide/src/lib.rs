@@ -3,6 +3,9 @@
 //! - [`NearestVertexCollider`]: P1's collider. Each point keeps its nearest body vertex, updated by a
 //!   local hill-climb from last step's vertex over the body's vertex graph; a point is inside when it is
 //!   behind every face incident to that vertex, and is then moved onto the nearest of those faces.
+//! - [`SdfCollider`]: P3's signed distance field on a regular grid (trilinear), rebuilt from the
+//!   deformed body at every update (narrow band plus flood fill).
+//! - [`DepthMapCollider`]: P4's six orthographic depth and normal maps of the body, on the CPU.
 //! - [`ExactCollider`]: closest point on the whole triangle mesh (parry3d-f64, with pseudo-normal
 //!   inside tests): the referee that measures every other collider.
 //! - [`Mannequin`]: a parametric body from measurements (mesh, skeleton, skin weights), posed by
@@ -12,20 +15,24 @@
 //!   the body moves.
 
 pub mod body;
+pub mod depth;
 pub mod exact;
 pub mod follow;
 pub mod girth;
 pub mod makehuman;
 pub mod mannequin;
+pub mod sdf;
 pub mod skin;
 pub mod tracker;
 
 pub use body::{BodyError, BodyMesh};
+pub use depth::DepthMapCollider;
 pub use exact::{ExactCollider, penetration_depths};
 pub use follow::{BodyFollower, FollowParams, SurfaceBinding};
 pub use girth::girth_at;
 pub use makehuman::{Girths, MakeHumanBody, MakeHumanError};
 pub use mannequin::{JOINT_NAMES, Mannequin};
+pub use sdf::SdfCollider;
 pub use skin::{SkinWeights, SkinnedBody, joint_transforms};
 pub use tracker::NearestVertexCollider;
 

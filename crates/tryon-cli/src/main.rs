@@ -45,6 +45,9 @@ enum Command {
         frames: Option<usize>,
         #[arg(long, short)]
         quiet: bool,
+        /// Override a scene value, e.g. `--set effects.body_collision=sdf` (repeatable).
+        #[arg(long = "set", value_name = "TABLE.KEY=VALUE")]
+        sets: Vec<String>,
     },
     /// Validate a scene file (parse, check values, assemble) without running it.
     Check { scene: PathBuf },
@@ -158,10 +161,13 @@ fn main() -> ExitCode {
             out,
             frames,
             quiet,
-        } => load(&scene).and_then(|s| {
-            let out = out.unwrap_or_else(|| PathBuf::from("out").join(&s.scene.name));
-            assemble(s, &scene.display().to_string()).and_then(|p| run(p, &out, frames, quiet))
-        }),
+            sets,
+        } => Scene::load_with_overrides(&scene, &sets)
+            .map_err(|e| Failure::BadInput(e.to_string()))
+            .and_then(|s| {
+                let out = out.unwrap_or_else(|| PathBuf::from("out").join(&s.scene.name));
+                assemble(s, &scene.display().to_string()).and_then(|p| run(p, &out, frames, quiet))
+            }),
         Command::Inspect { file } => tryon_io::inspect::summarize(&file)
             .map(|text| {
                 print!("{text}");

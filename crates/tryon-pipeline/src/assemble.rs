@@ -5,8 +5,8 @@ use crate::coarse::CoarseLoop;
 use crate::real;
 use crate::scene::{BodyKind, CollisionMethod, GarmentKind, IntegratorName, MotionKind, Scene};
 use body_collide::{
-    BodyError, BodyFollower, BodyMesh, ExactCollider, FollowParams, Mannequin,
-    NearestVertexCollider, SkinnedBody, SurfaceBinding,
+    BodyError, BodyFollower, BodyMesh, DepthMapCollider, ExactCollider, FollowParams, Mannequin,
+    NearestVertexCollider, SdfCollider, SkinnedBody, SurfaceBinding,
 };
 use cloth_dyn::{BuildClothError, ClothModel, ClothParams, ClothSim, Handle, IntegratorKind};
 use garment_fit::{DressParams, PatternError, SkirtParams};
@@ -440,13 +440,7 @@ impl Pipeline {
         });
         let model = ClothModel::build_with_kinematic(&garment, &p, handles, &kinematic)?;
         let sim = ClothSim::new(model, p, kind);
-        let collider: Box<dyn Collider> = match fx.body_collision {
-            CollisionMethod::NearestVertex => {
-                Box::new(NearestVertexCollider::new(&body_mesh, thickness)?)
-            }
-            CollisionMethod::Exact => Box::new(ExactCollider::new(&body_mesh, thickness)?),
-            CollisionMethod::None => Box::new(NoCollider),
-        };
+        let collider = make_collider(fx.body_collision, &body_mesh, thickness, &fx)?;
         let follower = (fx.follow_body && moving)
             .then(|| {
                 BodyMesh::new(&body_mesh).map(|b| BodyFollower::new(b, FollowParams::default()))
@@ -503,10 +497,8 @@ impl Pipeline {
             };
             let detail = wrinkle::Detail::new(&surface, &garment.positions, params.clone())?;
             let fine_collider: Option<Box<dyn Collider>> = if params.fine_collision {
-                Some(match fx.body_collision {
-                    CollisionMethod::Exact => Box::new(ExactCollider::new(&body_mesh, 0.0)?),
-                    _ => Box::new(NearestVertexCollider::new(&body_mesh, 0.0)?),
-                })
+                let method = fx.fine_collider.unwrap_or(fx.body_collision);
+                Some(make_collider(method, &body_mesh, 0.0, &fx)?)
             } else {
                 None
             };
@@ -554,4 +546,22 @@ impl Pipeline {
             fps,
         })
     }
+}
+
+/// The collider a scene asks for, keeping `thickness` from the body.
+fn make_collider(
+    method: CollisionMethod,
+    body: &PolyMesh,
+    thickness: Real,
+    fx: &crate::scene::EffectsSection,
+) -> Result<Box<dyn Collider>, BodyError> {
+    Ok(match method {
+        CollisionMethod::NearestVertex => Box::new(NearestVertexCollider::new(body, thickness)?),
+        CollisionMethod::Exact => Box::new(ExactCollider::new(body, thickness)?),
+        CollisionMethod::Sdf => Box::new(SdfCollider::new(body, thickness, fx.sdf_resolution)?),
+        CollisionMethod::DepthMaps => {
+            Box::new(DepthMapCollider::new(body, thickness, fx.depth_resolution)?)
+        }
+        CollisionMethod::None => Box::new(NoCollider),
+    })
 }

@@ -216,9 +216,26 @@ pub struct ClothSection {
 pub enum CollisionMethod {
     /// P1's nearest-vertex tracking.
     NearestVertex,
-    /// Closest point on the whole mesh (parry).
+    /// Closest point on the whole mesh (parry): the referee, slow but exact.
     Exact,
+    /// P3's signed distance grid (trilinear), rebuilt when the body moves.
+    Sdf,
+    /// P4's six-view depth and normal maps, re-rendered when the body moves.
+    DepthMaps,
     None,
+}
+
+impl CollisionMethod {
+    /// The name the scene file uses.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            CollisionMethod::NearestVertex => "nearest_vertex",
+            CollisionMethod::Exact => "exact",
+            CollisionMethod::Sdf => "sdf",
+            CollisionMethod::DepthMaps => "depth_maps",
+            CollisionMethod::None => "none",
+        }
+    }
 }
 
 /// Which effects act. A disabled effect is not assembled at all.
@@ -233,6 +250,13 @@ pub struct EffectsSection {
     /// Coulomb friction coefficient at body contacts; 0 turns friction off.
     pub friction: Real,
     pub body_collision: CollisionMethod,
+    /// Collider of the fine surface (P1.4.2); the body collider's method when absent (`none` is
+    /// not allowed: turn `fine_collision` off instead).
+    pub fine_collider: Option<CollisionMethod>,
+    /// Grid cells along the body's longest side for `sdf`.
+    pub sdf_resolution: usize,
+    /// Pixels along the body's longest side for `depth_maps`.
+    pub depth_resolution: usize,
     /// P1.3.4: carry the cloth with the moving body.
     pub follow_body: bool,
     /// Velocity damping (1/s); 0 turns it off.
@@ -266,6 +290,9 @@ impl Default for EffectsSection {
             wind: [0.0; 3],
             friction: 0.5,
             body_collision: CollisionMethod::NearestVertex,
+            fine_collider: None,
+            sdf_resolution: 64,
+            depth_resolution: 256,
             follow_body: true,
             velocity_damping: 0.2,
             refine: 0,
@@ -385,6 +412,76 @@ impl Scene {
             source,
         })?;
         let mut scene = Scene::parse(&text, path)?;
+        scene.source = Some(path.to_path_buf());
+        Ok(scene)
+    }
+
+    /// Parses a scene with `table.key=value` overrides applied first (the value in TOML syntax; a
+    /// bare word is taken as a string), as `tryon run --set` does. Errors name the override.
+    pub fn parse_with_overrides(
+        text: &str,
+        file: &Path,
+        sets: &[String],
+    ) -> Result<Scene, SceneError> {
+        if sets.is_empty() {
+            return Scene::parse(text, file);
+        }
+        let mut table: toml::Table = toml::from_str(text).map_err(|e| {
+            let (line, column) = e.span().map_or((0, 0), |s| line_col(text, s.start));
+            SceneError::Syntax {
+                file: file.to_path_buf(),
+                line,
+                column,
+                message: e.message().to_string(),
+            }
+        })?;
+        for set in sets {
+            let bad = |expected: &str| SceneError::Invalid {
+                file: file.to_path_buf(),
+                line: None,
+                key: "--set".into(),
+                value: set.clone(),
+                expected: expected.into(),
+            };
+            let (key, value) = set.split_once('=').ok_or_else(|| bad("table.key=value"))?;
+            let (t, k) = key
+                .trim()
+                .split_once('.')
+                .ok_or_else(|| bad("table.key=value (for example effects.refine=2)"))?;
+            let value = value.trim();
+            let parsed = toml::from_str::<toml::Table>(&format!("v = {value}"))
+                .ok()
+                .and_then(|mut v| v.remove("v"))
+                .unwrap_or_else(|| toml::Value::String(value.to_string()));
+            let entry = table
+                .entry(t.to_string())
+                .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+            let toml::Value::Table(section) = entry else {
+                return Err(bad("a key inside a [table]"));
+            };
+            section.insert(k.to_string(), parsed);
+        }
+        let merged = toml::to_string(&table).map_err(|e| SceneError::Syntax {
+            file: file.to_path_buf(),
+            line: 0,
+            column: 0,
+            message: e.to_string(),
+        })?;
+        let named = PathBuf::from(format!(
+            "{} (with --set {})",
+            file.display(),
+            sets.join(" ")
+        ));
+        Scene::parse(&merged, &named)
+    }
+
+    /// Reads a scene file and applies `table.key=value` overrides.
+    pub fn load_with_overrides(path: &Path, sets: &[String]) -> Result<Scene, SceneError> {
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let mut scene = Scene::parse_with_overrides(&text, path, sets)?;
         scene.source = Some(path.to_path_buf());
         Ok(scene)
     }
@@ -579,6 +676,30 @@ impl Scene {
         range("effects", "friction", Some(e.friction), 0.0, 5.0)?;
         if e.refine > 4 {
             return Err(bad("effects", "refine", e.refine.to_string(), "0..=4"));
+        }
+        if !(8..=512).contains(&e.sdf_resolution) {
+            return Err(bad(
+                "effects",
+                "sdf_resolution",
+                e.sdf_resolution.to_string(),
+                "8..=512 cells along the body's longest side",
+            ));
+        }
+        if !(16..=4096).contains(&e.depth_resolution) {
+            return Err(bad(
+                "effects",
+                "depth_resolution",
+                e.depth_resolution.to_string(),
+                "16..=4096 pixels along the body's longest side",
+            ));
+        }
+        if e.fine_collider == Some(CollisionMethod::None) {
+            return Err(bad(
+                "effects",
+                "fine_collider",
+                "\"none\"".into(),
+                "\"nearest_vertex\", \"sdf\", \"depth_maps\" or \"exact\" (set fine_collision = false to turn it off)",
+            ));
         }
         range("effects", "k_out_plane", Some(e.k_out_plane), 0.0, 100.0)?;
         range("effects", "h_normal", Some(e.h_normal), 1e-5, 1.0)?;
