@@ -2,7 +2,7 @@
 //! collision with Coulomb friction, and the guard that rejects a non-finite or exploding substep,
 //! retries it at half the step, and as a last resort rolls offending particles back.
 
-use crate::forces::{accelerations, stiffness_bounds};
+use crate::forces::{accelerations, jacobian_product, stiffness_bounds};
 use crate::integrator::{Derivative, Integrator, IntegratorKind};
 use crate::model::ClothModel;
 use crate::params::ClothParams;
@@ -37,6 +37,8 @@ pub struct ClothSim {
     tethers: Tethers,
     tethers_stale: bool,
     stamp: Vec<bool>,
+    /// Mass of each particle, 0 where pinned or handled (for implicit integrators).
+    free_mass: Vec<Real>,
 }
 
 impl std::fmt::Debug for ClothSim {
@@ -57,6 +59,7 @@ struct Rhs<'a> {
     force: &'a mut Vec<Vec3>,
     elastic: &'a mut Vec<Vec3>,
     record: bool,
+    free_mass: &'a [Real],
 }
 
 impl Derivative for Rhs<'_> {
@@ -67,6 +70,22 @@ impl Derivative for Rhs<'_> {
             None
         };
         accelerations(self.model, self.params, x, v, self.force, elastic, a);
+    }
+
+    fn jacobian_product(
+        &mut self,
+        x: &[Vec3],
+        _v: &[Vec3],
+        w: &[Vec3],
+        cx: Real,
+        cv: Real,
+        out: &mut [Vec3],
+    ) {
+        jacobian_product(self.model, self.params, x, w, cx, cv, self.force, out);
+    }
+
+    fn masses(&self) -> Option<&[Real]> {
+        Some(self.free_mass)
     }
 }
 
@@ -91,6 +110,15 @@ impl ClothSim {
             params.max_substep
         };
         let z = vec![Vec3::zeros(); n];
+        let free_mass = (0..n)
+            .map(|i| {
+                if model.inv_mass[i] > 0.0 {
+                    model.mass[i]
+                } else {
+                    0.0
+                }
+            })
+            .collect();
         ClothSim {
             model,
             params,
@@ -107,6 +135,7 @@ impl ClothSim {
             tethers: Tethers::default(),
             tethers_stale: true,
             stamp: Vec::new(),
+            free_mass,
         }
     }
 
@@ -149,6 +178,7 @@ impl ClothSim {
             force: &mut self.force,
             elastic: &mut self.elastic,
             record,
+            free_mass: &self.free_mass,
         };
         self.integrator.step(&mut rhs, x, v, h);
         for hd in &self.model.handles {

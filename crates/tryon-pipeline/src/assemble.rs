@@ -427,6 +427,7 @@ impl Pipeline {
         let kind = match c.integrator.unwrap_or(IntegratorName::Rk4) {
             IntegratorName::Rk4 => IntegratorKind::Rk4,
             IntegratorName::SymplecticEuler => IntegratorKind::SymplecticEuler,
+            IntegratorName::ImplicitEuler => IntegratorKind::ImplicitEuler,
         };
         let kinematic: Vec<u32> = attachments.iter().map(|a| a.vertex).collect();
         let handles: Vec<Handle> = bands.as_ref().map_or(Vec::new(), |b| {

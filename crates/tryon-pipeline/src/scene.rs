@@ -187,6 +187,8 @@ impl Default for MotionSection {
 pub enum IntegratorName {
     Rk4,
     SymplecticEuler,
+    /// Baraff and Witkin's linearised backward Euler, solved by conjugate gradients.
+    ImplicitEuler,
 }
 
 /// Cloth material and solver settings; absent values take the garment's defaults.
