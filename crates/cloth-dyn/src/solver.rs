@@ -4,7 +4,7 @@
 
 use crate::forces::{accelerations, jacobian_product, stiffness_bounds};
 use crate::integrator::{Derivative, Integrator, IntegratorKind};
-use crate::model::ClothModel;
+use crate::model::{ClothModel, Handle};
 use crate::params::ClothParams;
 use crate::strain::{ContactPlane, Tethers, limit_strain};
 use tryon_core::frames::{CoarseFrame, Contact, StepReport};
@@ -137,6 +137,19 @@ impl ClothSim {
             stamp: Vec::new(),
             free_mass,
         }
+    }
+
+    /// Hands particle `handle.particle` to a scripted path from now on (a user grabbing the cloth):
+    /// it stops responding to forces, and tethers are recomputed.
+    pub fn grab(&mut self, handle: Handle) {
+        let p = handle.particle as usize;
+        if p >= self.model.particle_count() || handle.path.is_empty() {
+            return;
+        }
+        self.model.inv_mass[p] = 0.0;
+        self.free_mass[p] = 0.0;
+        self.model.handles.push(handle);
+        self.tethers_stale = true;
     }
 
     /// The substep used when nothing goes wrong (s).

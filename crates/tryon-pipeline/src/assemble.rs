@@ -15,7 +15,7 @@ use thiserror::Error;
 use tryon_core::frames::BodyFrame;
 use tryon_core::math::{Real, Vec3};
 use tryon_core::measure::{MeasureError, Measurements};
-use tryon_core::mesh::{PolyMesh, grid_xz};
+use tryon_core::mesh::{Face, PolyMesh, grid_xz};
 use tryon_core::shapes::icosphere;
 use tryon_core::stages::{Collider, MotionSource, NoCollider, StillMotion};
 
@@ -120,6 +120,8 @@ pub struct Pipeline {
     pub mannequin: Option<Mannequin>,
     pub frames: usize,
     pub fps: Real,
+    /// A grab still to happen: path keys (time, position); see `[garment] grab`.
+    pub grab: Option<Vec<(Real, Vec3)>>,
 }
 
 /// Default material for a garment whose edges average `h` metres: the springs scale with particle
@@ -189,6 +191,12 @@ impl Pipeline {
                     scene.motion.duration.unwrap_or(2.0),
                 )
             }
+            BodyKind::Object => (
+                object_on_table(&scene)?,
+                BodyDriver::Fixed,
+                None,
+                scene.motion.duration.unwrap_or(3.0),
+            ),
             BodyKind::Mannequin => {
                 let m = measurements(&scene);
                 let man = Mannequin::new(&m)?;
@@ -439,6 +447,14 @@ impl Pipeline {
                 })
                 .collect()
         });
+        let grab = g.grab.as_ref().map(|path| {
+            path.iter()
+                .map(|k| (k[0], Vec3::new(k[1], k[2], k[3])))
+                .collect::<Vec<_>>()
+        });
+        if grab.is_some() {
+            stages.push("grab");
+        }
         let model = ClothModel::build_with_kinematic(&garment, &p, handles, &kinematic)?;
         let sim = ClothSim::new(model, p, kind);
         let collider = make_collider(fx.body_collision, &body_mesh, thickness, &fx)?;
@@ -545,6 +561,7 @@ impl Pipeline {
             mannequin,
             frames,
             fps,
+            grab,
         })
     }
 }
@@ -565,4 +582,103 @@ fn make_collider(
         }
         CollisionMethod::None => Box::new(NoCollider),
     })
+}
+
+/// P4's scene body: the scene's OBJ scaled to metres, centred over the origin and standing on a
+/// closed table slab whose top is y = 0.
+fn object_on_table(scene: &Scene) -> Result<PolyMesh, AssembleError> {
+    let b = &scene.body;
+    let path = crate::real::resolve(scene, "body.file", b.file.as_deref().unwrap_or_default())?;
+    let obj = tryon_io::read_obj(&path).map_err(crate::real::AssetError::from)?;
+    let scale = b.scale.unwrap_or(1.0);
+    let mut mesh = PolyMesh {
+        positions: obj.positions.iter().map(|p| p * scale).collect(),
+        faces: obj.faces,
+    };
+    let (mut lo, mut hi) = (
+        Vec3::repeat(Real::INFINITY),
+        Vec3::repeat(Real::NEG_INFINITY),
+    );
+    for p in &mesh.positions {
+        lo = lo.inf(p);
+        hi = hi.sup(p);
+    }
+    let shift = Vec3::new(-(lo.x + hi.x) / 2.0, -lo.y, -(lo.z + hi.z) / 2.0);
+    for p in &mut mesh.positions {
+        *p += shift;
+    }
+    let side = b.table.unwrap_or(1.5);
+    if side > 0.0 {
+        let cells = ((side / 0.03).ceil() as usize).clamp(2, 200);
+        let slab = table_slab(side, 0.04, cells);
+        let base = mesh.positions.len() as u32;
+        mesh.positions.extend_from_slice(&slab.positions);
+        mesh.faces.extend(slab.faces.iter().map(|f| match f {
+            Face::Tri(t) => Face::Tri(t.map(|v| v + base)),
+            Face::Quad(q) => Face::Quad(q.map(|v| v + base)),
+        }));
+    }
+    Ok(mesh)
+}
+
+/// A closed box `side` x `thick` x `side` with its top face at y = 0, the top and bottom split
+/// into `cells` x `cells` quads (so nearest-vertex tracking has vertices everywhere), faces
+/// wound outward.
+pub fn table_slab(side: Real, thick: Real, cells: usize) -> PolyMesh {
+    use std::collections::HashMap;
+    let n = cells.max(1);
+    let mut index: HashMap<(usize, usize, usize), u32> = HashMap::new();
+    let mut positions = Vec::new();
+    let mut vertex = |i: usize, j: usize, k: usize| -> u32 {
+        *index.entry((i, j, k)).or_insert_with(|| {
+            positions.push(Vec3::new(
+                side * (i as Real / n as Real - 0.5),
+                if j == 1 { 0.0 } else { -thick },
+                side * (k as Real / n as Real - 0.5),
+            ));
+            (positions.len() - 1) as u32
+        })
+    };
+    let mut quads: Vec<[u32; 4]> = Vec::new();
+    for a in 0..n {
+        for c in 0..n {
+            for j in [0, 1] {
+                quads.push([
+                    vertex(a, j, c),
+                    vertex(a + 1, j, c),
+                    vertex(a + 1, j, c + 1),
+                    vertex(a, j, c + 1),
+                ]);
+            }
+        }
+        for edge in [0, n] {
+            quads.push([
+                vertex(a, 0, edge),
+                vertex(a + 1, 0, edge),
+                vertex(a + 1, 1, edge),
+                vertex(a, 1, edge),
+            ]);
+            quads.push([
+                vertex(edge, 0, a),
+                vertex(edge, 0, a + 1),
+                vertex(edge, 1, a + 1),
+                vertex(edge, 1, a),
+            ]);
+        }
+    }
+    let centre = Vec3::new(0.0, -thick / 2.0, 0.0);
+    let faces = quads
+        .into_iter()
+        .map(|q| {
+            let p = q.map(|v| positions[v as usize]);
+            let normal = (p[1] - p[0]).cross(&(p[2] - p[0]));
+            let mid = (p[0] + p[1] + p[2] + p[3]) / 4.0;
+            if normal.dot(&(mid - centre)) < 0.0 {
+                Face::Quad([q[3], q[2], q[1], q[0]])
+            } else {
+                Face::Quad(q)
+            }
+        })
+        .collect();
+    PolyMesh { positions, faces }
 }

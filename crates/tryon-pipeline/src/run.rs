@@ -289,6 +289,26 @@ impl Pipeline {
         if skinned && let Some(b) = &mut self.bands {
             timers.time("bands", || b.update(body_frame, &mut c.sim.model.handles));
         }
+        // The grab takes the particle nearest its first point once the frame reaches its time.
+        if let Some(path) = &self.grab
+            && path[0].0 <= t
+        {
+            let start = path[0].1;
+            let x = &c.frame.positions;
+            let particle = (0..x.len())
+                .min_by(|&a, &b| {
+                    (x[a] - start)
+                        .norm_squared()
+                        .total_cmp(&(x[b] - start).norm_squared())
+                })
+                .unwrap_or(0);
+            let at = x[particle];
+            c.sim.grab(cloth_dyn::Handle {
+                particle: particle as u32,
+                path: path.iter().map(|(k, p)| (*k, at + (p - start))).collect(),
+            });
+            self.grab = None;
+        }
         let report = timers.time("cloth", || {
             c.sim.step_frame(&mut c.frame, dt, c.collider.as_mut())
         });

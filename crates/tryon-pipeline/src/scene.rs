@@ -44,6 +44,8 @@ pub struct SceneSection {
     pub duration: Option<Real>,
     /// Time the body holds its rest pose before the motion starts, letting the garment settle (s).
     pub settle: Real,
+    /// Run frame n+1's coarse step and frame n's surface stages at the same time (two threads).
+    pub pipelined: bool,
 }
 
 impl Default for SceneSection {
@@ -53,6 +55,7 @@ impl Default for SceneSection {
             fps: 30.0,
             duration: None,
             settle: 0.3,
+            pipelined: false,
         }
     }
 }
@@ -64,6 +67,8 @@ pub enum BodyKind {
     Sphere,
     /// MakeHuman's base mesh from the shared assets, morphed toward any measurements given.
     Makehuman,
+    /// A rigid object from an OBJ file (`file`, `scale`), standing on a table (P4's scene).
+    Object,
 }
 
 /// The rig that skins a MakeHuman body.
@@ -96,6 +101,13 @@ pub struct BodySection {
     pub radius: Option<Real>,
     /// Sphere icosphere subdivisions.
     pub subdivisions: Option<u32>,
+    /// Object: the OBJ file (relative to the scene file, else to the shared asset folder).
+    pub file: Option<String>,
+    /// Object: uniform scale from file units to metres (default 1).
+    pub scale: Option<Real>,
+    /// Object: side of the square table top it stands on, centred under it (m); 0 = no table.
+    /// Default 1.5.
+    pub table: Option<Real>,
 }
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
@@ -126,6 +138,10 @@ pub struct GarmentSection {
     pub drop_height: Option<Real>,
     /// Mhclo: the .mhclo file (relative to the scene file, else to the shared asset folder).
     pub file: Option<String>,
+    /// Square: at the first key's time a kinematic handle grabs the particle then nearest the first
+    /// point and moves it by the path's displacements, `[[t, x, y, z], ...]` (s, m), holding the
+    /// last point (P4's user dragging the cloth).
+    pub grab: Option<Vec<[Real; 4]>>,
     /// Elastic bands (m): border loops lying within this distance of the body when fitted (90% of
     /// their vertices) grip it and move with it, as a waistband, collar or cuff does. 0 turns them
     /// off. Default 0.006 for `mhclo` garments, 0 for the patterns.
@@ -554,12 +570,60 @@ impl Scene {
                 }
             }
         }
+        let g = &self.garment;
+        range("body", "scale", b.scale, 1e-4, 1e4)?;
+        range("body", "table", b.table, 0.0, 20.0)?;
+        if b.kind == BodyKind::Object && b.file.is_none() {
+            return Err(bad(
+                "body",
+                "file",
+                "nothing".into(),
+                "an .obj file for kind = \"object\"",
+            ));
+        }
+        if b.kind != BodyKind::Object {
+            for (k, given) in [
+                ("file", b.file.is_some()),
+                ("scale", b.scale.is_some()),
+                ("table", b.table.is_some()),
+            ] {
+                if given {
+                    return Err(bad(
+                        "body",
+                        k,
+                        "a value".into(),
+                        "nothing: only kind = \"object\" takes it",
+                    ));
+                }
+            }
+        }
+        if let Some(path) = &g.grab {
+            let ok = !path.is_empty()
+                && path.iter().all(|p| p.iter().all(|x| x.is_finite()))
+                && path.windows(2).all(|w| w[1][0] > w[0][0])
+                && path[0][0] >= 0.0;
+            if !ok {
+                return Err(bad(
+                    "garment",
+                    "grab",
+                    format!("{path:?}"),
+                    "[[t, x, y, z], ...] with finite numbers and times rising from >= 0",
+                ));
+            }
+            if g.kind != GarmentKind::Square {
+                return Err(bad(
+                    "garment",
+                    "grab",
+                    format!("{path:?}"),
+                    "nothing: only kind = \"square\" can be grabbed",
+                ));
+            }
+        }
         if let Some(n) = b.subdivisions
             && n > 6
         {
             return Err(bad("body", "subdivisions", n.to_string(), "0..=6"));
         }
-        let g = &self.garment;
         if let Some(e) = &g.ease {
             let want = if g.kind == GarmentKind::Skirt { 2 } else { 3 };
             if e.len() != want || e.iter().any(|x| !(x.is_finite() && *x >= 0.0 && *x <= 0.5)) {
@@ -745,6 +809,22 @@ impl Scene {
             }
         }
         // Combinations.
+        if self.body.kind == BodyKind::Object && self.motion.kind != MotionKind::Still {
+            return Err(bad(
+                "motion",
+                "kind",
+                format!("{:?}", self.motion.kind).to_lowercase(),
+                "\"still\" for an object body (it has no skeleton)",
+            ));
+        }
+        if self.body.kind == BodyKind::Object && g.kind != GarmentKind::Square {
+            return Err(bad(
+                "garment",
+                "kind",
+                format!("{:?}", g.kind).to_lowercase(),
+                "\"square\" on an object body",
+            ));
+        }
         if self.body.kind == BodyKind::Sphere && self.motion.kind != MotionKind::Still {
             return Err(bad(
                 "motion",
