@@ -5,6 +5,7 @@ mod end_to_end;
 mod makehuman_body;
 mod real_assets;
 mod retarget;
+mod tradeoff_scenes;
 
 use body_collide::{
     BodyFollower, BodyMesh, ExactCollider, FollowParams, NearestVertexCollider, penetration_depths,

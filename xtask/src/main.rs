@@ -8,10 +8,13 @@ use std::process::{Command, ExitCode};
 const USAGE: &str = "usage: cargo xtask <command>
 
 commands:
-  ci                 cargo fmt --check, clippy -D warnings, all tests, tidy
+  ci                 cargo fmt --check, clippy -D warnings, all tests, tidy, tradeoff --quick
   bench [ARGS..]     criterion benchmarks (cargo bench -p tryon-benches -- ARGS)
   drape [N..] [--integrator rk4|symplectic_euler|all] [--frames F] [--trace] [--set KEY=VALUE] [--png FILE]
                      run the drape scene (release) and print ms/frame, stretch, penetration
+  tradeoff [--quick] [--summary FILE]
+                     what accuracy costs in time: collider, integrator, refinement and wrinkle
+                     sweeps and P4's scene; report.md and SVG plots under target/tradeoff/
   tidy               check the architecture invariants";
 
 fn main() -> ExitCode {
@@ -21,6 +24,7 @@ fn main() -> ExitCode {
         Some("bench") => bench(&args[1..]),
         Some("drape") => drape::run(&args[1..]),
         Some("tidy") => tidy::run(),
+        Some("tradeoff") => tradeoff(&args[1..]),
         Some("-h" | "--help" | "help") => {
             println!("{USAGE}");
             Ok(())
@@ -90,6 +94,14 @@ fn ci() -> Result<(), String> {
     cargo(&["test", "-p", "tryon-benches", "--benches"])?;
     let (passed, failed) = cargo_test_tally(&["test", "--workspace", "--all-targets"])?;
     println!("tests: {passed} passed, {failed} failed");
+    if failed == 0 {
+        // The trade-off sweeps at a few frames: every curve must have points.
+        tradeoff(&[
+            "--quick".to_string(),
+            "--out".into(),
+            "target/tradeoff-quick".into(),
+        ])?;
+    }
     if failed > 0 {
         Err(format!("{failed} test(s) failed"))
     } else {
@@ -136,6 +148,15 @@ fn cargo_test_tally(args: &[&str]) -> Result<(u64, u64), String> {
 
 fn bench(args: &[String]) -> Result<(), String> {
     let mut a = vec!["bench", "-p", "tryon-benches", "--"];
+    a.extend(args.iter().map(String::as_str));
+    cargo(&a)
+}
+
+/// `cargo xtask tradeoff`: the sweeps, in a release build, from the workspace root.
+fn tradeoff(args: &[String]) -> Result<(), String> {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    std::env::set_current_dir(&root).map_err(|e| format!("{}: {e}", root.display()))?;
+    let mut a = vec!["run", "--release", "-q", "-p", "tryon-tradeoff", "--"];
     a.extend(args.iter().map(String::as_str));
     cargo(&a)
 }

@@ -15,7 +15,7 @@ const STAGES: &[&str] = &[
     "mocap-retarget",
     "garment-fit",
 ];
-const MAY_PRINT: &[&str] = &["tryon-cli", "xtask"];
+const MAY_PRINT: &[&str] = &["tryon-cli", "tryon-tradeoff", "xtask"];
 
 pub fn run() -> Result<(), String> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"))

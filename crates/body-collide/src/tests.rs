@@ -334,3 +334,35 @@ fn sdf_and_depth_maps_resolve_a_sphere_to_millimetres() {
         }
     }
 }
+
+/// A body in two pieces (an object on a table): a point tracked near one piece and then moved into
+/// the other is still found inside, though no hill-climb leads from one piece to the other.
+#[test]
+fn tracking_sees_every_piece_of_the_body() {
+    let a = icosphere(0.2, 3, Vec3::zeros());
+    let b = icosphere(0.2, 3, Vec3::new(1.0, 0.0, 0.0));
+    let base = a.positions.len() as u32;
+    let mut m = a.clone();
+    m.positions.extend_from_slice(&b.positions);
+    m.faces.extend(b.faces.iter().map(|f| match f {
+        tryon_core::mesh::Face::Tri(t) => tryon_core::mesh::Face::Tri(t.map(|v| v + base)),
+        tryon_core::mesh::Face::Quad(q) => tryon_core::mesh::Face::Quad(q.map(|v| v + base)),
+    }));
+    let mut tracker = NearestVertexCollider::new(&m, 0.0).unwrap();
+    let mut pts = vec![Vec3::new(0.25, 0.0, 0.0)];
+    tracker.resolve(&mut pts, &mut Vec::new());
+    // Now inside the second sphere.
+    pts[0] = Vec3::new(0.9, 0.0, 0.0);
+    let mut contacts = Vec::new();
+    tracker.resolve(&mut pts, &mut contacts);
+    assert_eq!(
+        contacts.len(),
+        1,
+        "the point inside the second piece was missed"
+    );
+    assert!(
+        (pts[0] - Vec3::new(1.0, 0.0, 0.0)).norm() > 0.19,
+        "{:?}",
+        pts[0]
+    );
+}

@@ -29,6 +29,11 @@ pub struct NearestVertexCollider {
     /// Nearest body vertex of each probed point (`probe` keeps its own cache).
     pub probe_nearest: Vec<u32>,
     bounds: (Vec3, Vec3),
+    /// One vertex of each connected piece of the body beyond the first (an object on a table):
+    /// a hill-climb cannot cross from one piece to another, so each point also keeps a nearest
+    /// vertex on each of these pieces (`nearest_more`, pieces fastest).
+    extra_pieces: Vec<u32>,
+    nearest_more: Vec<u32>,
 }
 
 impl NearestVertexCollider {
@@ -36,6 +41,7 @@ impl NearestVertexCollider {
     pub fn new(mesh: &PolyMesh, thickness: Real) -> Result<Self, BodyError> {
         let body = BodyMesh::new(mesh)?;
         let bounds = body.bounds();
+        let extra_pieces = pieces(&body).into_iter().skip(1).collect();
         Ok(NearestVertexCollider {
             body,
             thickness,
@@ -44,21 +50,49 @@ impl NearestVertexCollider {
             rejected_frames: 0,
             probe_nearest: Vec::new(),
             bounds,
+            extra_pieces,
+            nearest_more: Vec::new(),
         })
+    }
+
+    /// The nearest vertex of point `i` on each piece: its main track and its other pieces' tracks.
+    fn candidates(&self, i: usize) -> impl Iterator<Item = u32> + '_ {
+        let k = self.extra_pieces.len();
+        std::iter::once(self.nearest[i]).chain(
+            self.nearest_more
+                .get(i * k..(i + 1) * k)
+                .into_iter()
+                .flatten()
+                .copied(),
+        )
     }
 
     /// Refreshes every point's nearest vertex (hill-climb, or brute force the first time).
     pub fn track(&mut self, points: &[Vec3]) {
+        let k = self.extra_pieces.len();
         if self.nearest.len() != points.len() {
             self.nearest = points
                 .iter()
                 .map(|p| self.body.nearest_vertex_brute(p))
+                .collect();
+            // The other pieces start from their seed vertex and climb.
+            self.nearest_more = points
+                .iter()
+                .flat_map(|p| {
+                    self.extra_pieces
+                        .iter()
+                        .map(|&s| self.body.climb(p, s))
+                        .collect::<Vec<_>>()
+                })
                 .collect();
             return;
         }
         for (i, p) in points.iter().enumerate() {
             if self.near_bounds(p) {
                 self.nearest[i] = self.body.climb(p, self.nearest[i]);
+                for j in i * k..(i + 1) * k {
+                    self.nearest_more[j] = self.body.climb(p, self.nearest_more[j]);
+                }
             }
         }
     }
@@ -162,13 +196,21 @@ impl Collider for NearestVertexCollider {
             if !self.near_bounds(p) {
                 continue;
             }
-            let v = self.nearest[i];
-            let (f, height, n) = match self.inside(p, v) {
-                Some((f, h)) => (f, h, self.body.face_normals[f as usize]),
-                None => match self.inside_crease(p, v, self.thickness) {
-                    Some(hit) => hit,
-                    None => continue,
-                },
+            // Inside any piece (the shallowest hit when in several).
+            let mut hit: Option<(u32, Real, Vec3)> = None;
+            for v in self.candidates(i) {
+                let h = match self.inside(p, v) {
+                    Some((f, h)) => Some((f, h, self.body.face_normals[f as usize])),
+                    None => self.inside_crease(p, v, self.thickness),
+                };
+                if let Some(h) = h
+                    && hit.is_none_or(|b| h.1 > b.1)
+                {
+                    hit = Some(h);
+                }
+            }
+            let Some((f, height, n)) = hit else {
+                continue;
             };
             *p += n * (self.thickness - height);
             let bary = self.bary(f, p);
@@ -241,4 +283,31 @@ impl Collider for NearestVertexCollider {
             || self.inside_crease(p, v, 0.0).is_some();
         Some(if behind_all { -d } else { d })
     }
+}
+
+/// One vertex of each connected piece of the body (by the vertex graph), largest piece first.
+fn pieces(body: &BodyMesh) -> Vec<u32> {
+    let n = body.positions.len();
+    let mut seen = vec![false; n];
+    let mut found: Vec<(usize, u32)> = Vec::new();
+    for start in 0..n {
+        if seen[start] || body.vertex_faces.row(start).is_empty() {
+            continue;
+        }
+        seen[start] = true;
+        let mut stack = vec![start as u32];
+        let mut size = 0;
+        while let Some(v) = stack.pop() {
+            size += 1;
+            for &w in body.ring.row(v as usize) {
+                if !seen[w as usize] {
+                    seen[w as usize] = true;
+                    stack.push(w);
+                }
+            }
+        }
+        found.push((size, start as u32));
+    }
+    found.sort_by_key(|p| std::cmp::Reverse(p.0));
+    found.into_iter().map(|(_, v)| v).collect()
 }

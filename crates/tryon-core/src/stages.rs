@@ -6,7 +6,7 @@ use crate::math::{Real, Vec3};
 use crate::pose::Pose;
 
 /// A motion: the pose at time t.
-pub trait MotionSource {
+pub trait MotionSource: Send {
     /// Length of the clip (s).
     fn duration(&self) -> Real;
     /// Writes the pose at time `t` (clamped to the clip) into `out`.
@@ -14,7 +14,7 @@ pub trait MotionSource {
 }
 
 /// A body that can be posed into a deformed mesh.
-pub trait BodyModel {
+pub trait BodyModel: Send {
     /// Number of body vertices.
     fn vertex_count(&self) -> usize;
     /// Triangles of the body mesh (fixed for the model's lifetime).
@@ -24,7 +24,7 @@ pub trait BodyModel {
 }
 
 /// Collision between points and the body.
-pub trait Collider {
+pub trait Collider: Send {
     /// Short name for reports.
     fn name(&self) -> &'static str;
     /// Takes the body's new shape. Called whenever the body moved.
@@ -84,7 +84,7 @@ impl Probe {
 }
 
 /// One frame of coarse cloth dynamics against a collider.
-pub trait ClothSolver {
+pub trait ClothSolver: Send {
     /// Advances `frame` by `dt`, resolving collisions with `collider`. Never fails: non-finite or
     /// exploding state is retried smaller or rolled back, and reported.
     fn step_frame(
@@ -96,13 +96,13 @@ pub trait ClothSolver {
 }
 
 /// Coarse surface -> fine surface. Topology is built once at construction.
-pub trait Refiner {
+pub trait Refiner: Send {
     /// Evaluates fine positions and normals from coarse positions and vertex normals.
     fn refine(&mut self, coarse_positions: &[Vec3], coarse_normals: &[Vec3], out: &mut FineSurface);
 }
 
 /// Fine detail on the refined surface (P1 section 4): penetration removal, wrinkles, normals.
-pub trait DetailModel {
+pub trait DetailModel: Send {
     /// Adjusts the fine surface in place.
     fn apply(&mut self, coarse: &CoarseFrame, fine: &mut FineSurface, collider: &mut dyn Collider);
 }

@@ -7,7 +7,7 @@ use crate::metrics::{penetration, stretch};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::time::Instant;
-use tryon_core::frames::{BodyFrame, StepReport};
+use tryon_core::frames::{BodyFrame, CoarseFrame, StepReport};
 use tryon_core::math::{Mat3, Real, Vec3};
 use tryon_core::pose::Pose;
 use tryon_core::stages::{BodyModel, ClothSolver, Collider};
@@ -52,6 +52,8 @@ pub struct Metrics {
     pub max_penetration_m: Real,
     /// The worst frame's 99th-percentile depth (m).
     pub p99_penetration_m: Real,
+    /// Mean over frames of the share of garment vertices deeper than 1 mm.
+    pub share_over_1mm: Real,
     /// Largest structural edge length / rest length over all frames.
     pub max_stretch: Real,
     /// Mean over frames of the mean structural stretch.
@@ -163,6 +165,13 @@ impl Timers {
         r
     }
 
+    /// Adds another set of timers' open frame into this one (for work done on another thread).
+    pub fn absorb(&mut self, other: &mut Timers) {
+        for (name, ms) in std::mem::take(&mut other.frame) {
+            *self.frame.entry(name).or_default() += ms;
+        }
+    }
+
     /// Closes the frame: each stage's time this frame goes into its mean and max.
     pub fn end_frame(&mut self) {
         for (name, ms) in std::mem::take(&mut self.frame) {
@@ -229,9 +238,14 @@ impl Pipeline {
         st
     }
 
-    /// One output frame ending at time `t`: motion, skinning, following, collider update and the
-    /// cloth step (each timed into `timers`). The referee is not run here.
-    pub fn advance(&mut self, st: &mut LoopState, t: Real, timers: &mut Timers) -> StepReport {
+    /// The coarse part of the output frame ending at time `t`: motion, skinning, following,
+    /// collider update and the cloth step (each timed into `timers`). The referee is not run here.
+    pub fn advance_coarse(
+        &mut self,
+        st: &mut LoopState,
+        t: Real,
+        timers: &mut Timers,
+    ) -> StepReport {
         let dt = 1.0 / self.fps;
         let settle = self.scene.scene.settle;
         let skinned = matches!(self.driver, BodyDriver::Skinned { .. });
@@ -324,8 +338,20 @@ impl Pipeline {
         if let Some(f) = &mut c.follower {
             timers.time("follow_body", || f.record(&c.frame.positions));
         }
+        report
+    }
+
+    /// One output frame ending at time `t`: [`Pipeline::advance_coarse`], then the surface stages
+    /// on its result.
+    pub fn advance(&mut self, st: &mut LoopState, t: Real, timers: &mut Timers) -> StepReport {
+        let report = self.advance_coarse(st, t, timers);
+        let skinned = matches!(self.driver, BodyDriver::Skinned { .. });
         if let Some(fine) = &mut self.fine {
-            fine.run(&c.frame, skinned.then_some(&*body_frame), timers);
+            fine.run(
+                &self.coarse.frame,
+                skinned.then_some(&st.body_frame),
+                timers,
+            );
         }
         report
     }
@@ -385,14 +411,59 @@ impl Pipeline {
         });
         let mut total = StepReport::default();
         let mut stretch_sum = 0.0;
+        let mut share_sum = 0.0;
         let loop_start = Instant::now();
-        for k in 1..=frames {
+        // Pipelined: frame k's coarse step runs beside frame k-1's surface stages, so the loop
+        // below records frame k-1 while frame k waits in `pending`.
+        let pipelined = self.scene.scene.pipelined && self.fine.is_some();
+        let mut pending: Option<(CoarseFrame, BodyFrame, Option<Pose>, StepReport)> = None;
+        let mut fine_timers = Timers::default();
+        let last = if pipelined { frames + 1 } else { frames };
+        for step in 1..=last {
+            let t = step as Real * dt;
+            let (report, coarse_x, body_frame, pose, k) = if pipelined {
+                let mut fine = self.fine.take();
+                let previous = pending.take();
+                let (fresh, _) = rayon::join(
+                    || {
+                        (step <= frames).then(|| {
+                            let r = self.advance_coarse(&mut st, t, &mut timers);
+                            (
+                                self.coarse.frame.clone(),
+                                st.body_frame.clone(),
+                                skinned.then(|| st.pose.clone()),
+                                r,
+                            )
+                        })
+                    },
+                    || {
+                        if let (Some(f), Some((cf, bf, _, _))) = (&mut fine, &previous) {
+                            f.run(cf, skinned.then_some(bf), &mut fine_timers);
+                        }
+                    },
+                );
+                self.fine = fine;
+                timers.absorb(&mut fine_timers);
+                pending = fresh;
+                let Some((cf, bf, pose, r)) = previous else {
+                    continue;
+                };
+                (r, cf.positions, bf, pose, step - 1)
+            } else {
+                let r = self.advance(&mut st, t, &mut timers);
+                (
+                    r,
+                    self.coarse.frame.positions.clone(),
+                    st.body_frame.clone(),
+                    skinned.then(|| st.pose.clone()),
+                    step,
+                )
+            };
             let t = k as Real * dt;
-            let report = self.advance(&mut st, t, &mut timers);
-            let (c, body_frame, pose) = (&self.coarse, &st.body_frame, &st.pose);
+            let body_frame = &body_frame;
             let output = match &self.fine {
                 Some(f) => &f.surface.positions,
-                None => &c.frame.positions,
+                None => &coarse_x,
             };
             total.accumulate(&report);
             let referee = &mut self.referee;
@@ -402,7 +473,7 @@ impl Pipeline {
                 }
                 (
                     penetration(referee, output),
-                    stretch(&edges, &rest, &c.frame.positions),
+                    stretch(&edges, &rest, &coarse_x),
                 )
             });
             let m = &mut stats.metrics;
@@ -410,6 +481,7 @@ impl Pipeline {
             m.p99_penetration_m = m.p99_penetration_m.max(pen.p99);
             m.max_stretch = m.max_stretch.max(smax);
             stretch_sum += smean;
+            share_sum += pen.share_over_1mm;
             stats.per_frame.push(FrameStats {
                 frame: k,
                 max_penetration_m: pen.max,
@@ -421,13 +493,14 @@ impl Pipeline {
             out_frames.push(FrameRecord {
                 time: t,
                 garment: output.clone(),
-                pose: skinned.then(|| pose.clone()),
+                pose,
             });
             timers.end_frame();
             progress(k, frames);
         }
         stats.loop_s = loop_start.elapsed().as_secs_f64();
         stats.metrics.mean_stretch = stretch_sum / frames.max(1) as Real;
+        stats.metrics.share_over_1mm = share_sum / frames.max(1) as Real;
         stats.metrics.non_finite_events = total.non_finite_events;
         stats.metrics.substep_retries = total.retries;
         stats.metrics.rollbacks = total.rollbacks;

@@ -1,0 +1,839 @@
+//! The sweeps and the report.
+
+use crate::plot::{Scale, Series, scatter};
+use body_collide::NearestVertexCollider;
+use cloth_dyn::{ClothSim, IntegratorKind};
+use pnt_surface::PnRefiner;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+use tryon_core::frames::{CoarseFrame, FineSurface, lattice_index};
+use tryon_core::math::{Real, Vec3, vertex_normals};
+use tryon_core::stages::ClothSolver;
+use tryon_pipeline::{Pipeline, Scene, Stats};
+
+/// The stages that make up the surface (P1 section 4).
+const SURFACE_STAGES: &[&str] = &["refine", "wrinkle", "fine_collision", "normals"];
+
+fn scenes_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/scenes")
+}
+
+/// A scene run: its stats and the pipeline afterwards.
+fn run_scene(
+    file: &str,
+    sets: &[String],
+    frames: Option<usize>,
+) -> Result<(Stats, Pipeline), String> {
+    let path = scenes_dir().join(file);
+    let scene = Scene::load_with_overrides(&path, sets).map_err(|e| e.to_string())?;
+    let mut p = Pipeline::new(scene).map_err(|e| format!("{}: {e}", path.display()))?;
+    let out = p.run(frames, |_, _| {});
+    Ok((out.stats, p))
+}
+
+/// Milliseconds per frame of everything but the referee.
+fn frame_ms(s: &Stats) -> Real {
+    s.stages
+        .iter()
+        .filter(|(k, _)| k.as_str() != "referee")
+        .map(|(_, t)| t.ms_mean)
+        .sum()
+}
+
+fn stage_ms(s: &Stats, names: &[&str]) -> Real {
+    names
+        .iter()
+        .filter_map(|n| s.stages.get(*n))
+        .map(|t| t.ms_mean)
+        .sum()
+}
+
+/// One collider setting's results on one scene.
+#[derive(Clone, Debug)]
+struct ColliderPoint {
+    scene: &'static str,
+    label: String,
+    ms: Real,
+    collider_ms: Real,
+    max_mm: Real,
+    p99_mm: Real,
+    share: Real,
+    stretch: Real,
+}
+
+fn collider_sweep(quick: bool, log: &mut String) -> Result<Vec<ColliderPoint>, String> {
+    let settings: Vec<(String, Vec<String>)> = {
+        let mut v = vec![("nearest_vertex".to_string(), vec![])];
+        let sdf: &[usize] = if quick { &[32] } else { &[32, 64, 128] };
+        let depth: &[usize] = if quick { &[128] } else { &[128, 256, 512] };
+        for r in sdf {
+            v.push((
+                format!("sdf {r}"),
+                vec![
+                    "effects.body_collision=\"sdf\"".into(),
+                    format!("effects.sdf_resolution={r}"),
+                ],
+            ));
+        }
+        for r in depth {
+            v.push((
+                format!("depth_maps {r}"),
+                vec![
+                    "effects.body_collision=\"depth_maps\"".into(),
+                    format!("effects.depth_resolution={r}"),
+                ],
+            ));
+        }
+        v.push((
+            "exact".to_string(),
+            vec!["effects.body_collision=\"exact\"".into()],
+        ));
+        v
+    };
+    let scenes: [(&'static str, &str, usize, usize); 3] = [
+        ("drape", "drape-sphere.toml", 8, 120),
+        ("demo", "demo-dress-walk.toml", 8, 90),
+        ("makehuman", "makehuman-dress-walk.toml", 4, 60),
+    ];
+    let mut out = Vec::new();
+    for (name, file, quick_frames, frames) in scenes {
+        for (label, sets) in &settings {
+            let mut sets = sets.clone();
+            if label == "nearest_vertex" {
+                sets.push("effects.body_collision=\"nearest_vertex\"".into());
+            }
+            let f = if quick { quick_frames } else { frames };
+            let t0 = Instant::now();
+            let (s, _) = run_scene(file, &sets, Some(f))?;
+            let m = &s.metrics;
+            let p = ColliderPoint {
+                scene: name,
+                label: label.clone(),
+                ms: frame_ms(&s),
+                collider_ms: stage_ms(&s, &["collider_update", "fine_collision"]),
+                max_mm: m.max_penetration_m * 1e3,
+                p99_mm: m.p99_penetration_m * 1e3,
+                share: m.share_over_1mm,
+                stretch: m.max_stretch,
+            };
+            let _ = writeln!(
+                log,
+                "colliders: {name} {label}: {f} frames, {:.2} ms/frame, max {:.2} mm ({:.0} s)",
+                p.ms,
+                p.max_mm,
+                t0.elapsed().as_secs_f64()
+            );
+            eprintln!("{}", log.lines().last().unwrap_or_default());
+            out.push(p);
+        }
+    }
+    Ok(out)
+}
+
+/// The drape's cloth, alone, with its scene's material: for integrator sweeps at exact steps.
+struct Drape {
+    pipeline: Pipeline,
+}
+
+impl Drape {
+    fn new() -> Result<Self, String> {
+        let path = scenes_dir().join("drape-sphere.toml");
+        let scene = Scene::load(&path).map_err(|e| e.to_string())?;
+        let pipeline = Pipeline::new(scene).map_err(|e| e.to_string())?;
+        Ok(Drape { pipeline })
+    }
+
+    /// Simulates `seconds` at fixed substep `h` with `kind` and stretch stiffness times `k_scale`;
+    /// `raw` turns Provot's strain limit off (it would hide an unstable integrator).
+    /// Returns the final frame, ms per 1/60 s frame, and whether it stayed stable (no retry,
+    /// rollback or non-finite value; no edge at 3 times its rest length: soft cloth without a strain
+    /// limit may sag, an unstable step tears it apart).
+    fn simulate(
+        &self,
+        kind: IntegratorKind,
+        h: Real,
+        seconds: Real,
+        k_scale: Real,
+        raw: bool,
+    ) -> Result<(CoarseFrame, Real, bool), String> {
+        let sim0 = &self.pipeline.coarse.sim;
+        let mut params = sim0.params.clone();
+        if raw {
+            params.max_strain = None;
+        }
+        params.auto_substep = false;
+        params.max_substep = h;
+        params.max_halvings = 0;
+        params.stretch_guard = None;
+        params.k_stretch *= k_scale;
+        let mut model = sim0.model.clone();
+        for s in &mut model.springs.k_stretch[model.structural.clone()] {
+            *s *= k_scale;
+        }
+        model.packed = model.springs.packed();
+        let mut sim = ClothSim::new(model, params, kind);
+        let thickness = self.pipeline.scene.cloth.thickness.unwrap_or(0.004);
+        let mut collider = NearestVertexCollider::new(&self.pipeline.body_mesh, thickness)
+            .map_err(|e| e.to_string())?;
+        let mut frame = sim.initial_frame();
+        if raw {
+            // A flat sheet in free fall does not deform, so nothing would excite an unstable
+            // step: jiggle every particle by up to 1 mm (deterministically).
+            for (i, x) in frame.positions.iter_mut().enumerate() {
+                let r = |k: Real| ((i as Real + 1.0) * k).sin() * 1e-3;
+                *x += Vec3::new(r(12.9898), r(78.233), r(37.719));
+            }
+        }
+        let dt = 1.0 / 60.0;
+        let frames = (seconds / dt).round() as usize;
+        let mut stable = true;
+        let t0 = Instant::now();
+        for _ in 0..frames {
+            let r = sim.step_frame(&mut frame, dt, &mut collider);
+            if r.retries + r.rollbacks + r.non_finite_events > 0 {
+                stable = false;
+            }
+        }
+        let ms = t0.elapsed().as_secs_f64() * 1e3 / frames.max(1) as Real;
+        let s = &sim.model.springs;
+        let worst = sim
+            .model
+            .structural
+            .clone()
+            .map(|k| {
+                (frame.positions[s.i[k] as usize] - frame.positions[s.j[k] as usize]).norm()
+                    / s.rest[k]
+            })
+            .fold(0.0, Real::max);
+        if !(worst < 3.0) {
+            stable = false;
+        }
+        Ok((frame, ms, stable))
+    }
+}
+
+#[derive(Clone, Debug)]
+struct IntegratorPoint {
+    integrator: &'static str,
+    h_ms: Real,
+    ms: Real,
+    error_mm: Real,
+    stable: bool,
+}
+
+#[derive(Clone, Debug)]
+struct StablePoint {
+    integrator: &'static str,
+    k_scale: Real,
+    largest_ms: Option<Real>,
+}
+
+const KINDS: [IntegratorKind; 3] = [
+    IntegratorKind::Rk4,
+    IntegratorKind::SymplecticEuler,
+    IntegratorKind::ImplicitEuler,
+];
+
+fn integrator_sweep(
+    quick: bool,
+    log: &mut String,
+) -> Result<(Vec<IntegratorPoint>, Vec<StablePoint>, Real), String> {
+    let drape = Drape::new()?;
+    let seconds = if quick { 0.25 } else { 0.5 };
+    let h_ref = if quick { 2e-4 } else { 5e-5 };
+    let (reference, _, _) = drape.simulate(IntegratorKind::Rk4, h_ref, seconds, 1.0, false)?;
+    let steps: &[Real] = if quick {
+        &[1e-3, 4e-3]
+    } else {
+        &[2.5e-4, 5e-4, 1e-3, 2e-3, 4e-3, 8.333e-3, 1.6667e-2]
+    };
+    let mut points = Vec::new();
+    for kind in KINDS {
+        for &h in steps {
+            let (f, ms, stable) = drape.simulate(kind, h, seconds, 1.0, false)?;
+            let n = f.positions.len().max(1) as Real;
+            let rms = (f
+                .positions
+                .iter()
+                .zip(&reference.positions)
+                .map(|(a, b)| (a - b).norm_squared())
+                .sum::<Real>()
+                / n)
+                .sqrt();
+            let p = IntegratorPoint {
+                integrator: kind.as_str(),
+                h_ms: h * 1e3,
+                ms,
+                error_mm: if rms.is_finite() {
+                    rms * 1e3
+                } else {
+                    Real::INFINITY
+                },
+                stable,
+            };
+            let _ = writeln!(
+                log,
+                "integrators: {} h {:.3} ms: error {:.3} mm, {:.2} ms/frame, stable {}",
+                p.integrator, p.h_ms, p.error_mm, p.ms, p.stable
+            );
+            eprintln!("{}", log.lines().last().unwrap_or_default());
+            points.push(p);
+        }
+    }
+    // Largest stable step against stiffness: steps 0.25 ms * sqrt(2)^k up to a frame.
+    let scales: &[Real] = if quick {
+        &[1.0, 16.0]
+    } else {
+        &[1.0, 4.0, 16.0, 64.0]
+    };
+    let candidates: Vec<Real> = (0..)
+        .map(|k| 2.5e-4 * (2.0 as Real).sqrt().powi(k))
+        .take_while(|h| *h <= 1.0 / 60.0 + 1e-9)
+        .collect();
+    let stable_seconds = if quick { 0.3 } else { 0.5 };
+    let mut stable = Vec::new();
+    for kind in KINDS {
+        for &k in scales {
+            let mut largest = None;
+            for &h in &candidates {
+                let (_, _, ok) = drape.simulate(kind, h, stable_seconds, k, true)?;
+                if ok {
+                    largest = Some(h * 1e3);
+                } else {
+                    break;
+                }
+            }
+            let _ = writeln!(
+                log,
+                "stability: {} k x{k}: largest stable step {largest:?} ms",
+                kind.as_str()
+            );
+            eprintln!("{}", log.lines().last().unwrap_or_default());
+            stable.push(StablePoint {
+                integrator: kind.as_str(),
+                k_scale: k,
+                largest_ms: largest,
+            });
+        }
+    }
+    Ok((points, stable, h_ref * 1e3))
+}
+
+#[derive(Clone, Debug)]
+struct RefinePoint {
+    level: u8,
+    fine_vertices: usize,
+    ms: Real,
+    max_dev_mm: Real,
+    mean_dev_mm: Real,
+}
+
+/// Deviation of the piecewise-linear level-`l` surface from the level-`top` PN surface on the same
+/// coarse state: every level-`top` vertex against the level-`l` lattice at the same parameters.
+fn deviation(fine: &FineSurface, top: &FineSurface) -> (Real, Real) {
+    let n = fine.segments;
+    let (mut max, mut sum) = (0.0 as Real, 0.0);
+    for (v, src) in top.sources.iter().enumerate() {
+        let f = src.face as usize;
+        let base = f * tryon_core::frames::lattice_len(n);
+        let s = src.bary[1] * n as Real;
+        let t = src.bary[2] * n as Real;
+        let i0 = (s.floor() as u32).min(n);
+        let j0 = (t.floor() as u32).min(n - i0.min(n));
+        let (fs, ft) = (s - i0 as Real, t - j0 as Real);
+        let at = |i: u32, j: u32| {
+            let i = i.min(n);
+            let j = j.min(n - i);
+            fine.positions[fine.lattice[base + lattice_index(n, i, j)] as usize]
+        };
+        let p = if i0 + j0 >= n {
+            at(i0, j0)
+        } else if fs + ft <= 1.0 {
+            at(i0, j0) * (1.0 - fs - ft) + at(i0 + 1, j0) * fs + at(i0, j0 + 1) * ft
+        } else {
+            at(i0 + 1, j0 + 1) * (fs + ft - 1.0)
+                + at(i0, j0 + 1) * (1.0 - fs)
+                + at(i0 + 1, j0) * (1.0 - ft)
+        };
+        let d = (p - top.positions[v]).norm();
+        max = max.max(d);
+        sum += d;
+    }
+    (max, sum / top.sources.len().max(1) as Real)
+}
+
+fn refine_sweep(quick: bool, log: &mut String) -> Result<Vec<RefinePoint>, String> {
+    let frames = if quick { 6 } else { 60 };
+    let top_level = if quick { 5 } else { 6 };
+    let mut out = Vec::new();
+    for level in 0..=4u8 {
+        let sets = vec![format!("effects.refine={level}")];
+        let (s, p) = run_scene("demo-dress-walk.toml", &sets, Some(frames))?;
+        let x = &p.coarse.frame.positions;
+        let mut normals = Vec::new();
+        let (tris, _) = p.garment.triangulate();
+        vertex_normals(x, &tris, &mut normals);
+        let (mut fine, mut top) = (FineSurface::default(), FineSurface::default());
+        PnRefiner::new(&p.garment, level)
+            .map_err(|e| e.to_string())?
+            .evaluate(x, &normals, &mut fine);
+        PnRefiner::new(&p.garment, top_level)
+            .map_err(|e| e.to_string())?
+            .evaluate(x, &normals, &mut top);
+        let (max, mean) = deviation(&fine, &top);
+        let point = RefinePoint {
+            level,
+            fine_vertices: s.counts.fine_vertices.unwrap_or(s.counts.coarse_vertices),
+            ms: stage_ms(&s, SURFACE_STAGES),
+            max_dev_mm: max * 1e3,
+            mean_dev_mm: mean * 1e3,
+        };
+        let _ = writeln!(
+            log,
+            "refine: level {level}: {} fine vertices, {:.2} ms, deviation from level {top_level} max {:.3} mean {:.3} mm",
+            point.fine_vertices, point.ms, point.max_dev_mm, point.mean_dev_mm
+        );
+        eprintln!("{}", log.lines().last().unwrap_or_default());
+        out.push(point);
+    }
+    Ok(out)
+}
+
+#[derive(Clone, Debug)]
+struct WrinklePoint {
+    wrinkles: bool,
+    ms: Real,
+    length_error: Real,
+}
+
+fn wrinkle_sweep(quick: bool, log: &mut String) -> Result<Vec<WrinklePoint>, String> {
+    let frames = if quick { 6 } else { 90 };
+    let mut out = Vec::new();
+    for on in [false, true] {
+        let sets = vec!["effects.refine=2".into(), format!("effects.wrinkles={on}")];
+        let (s, _) = run_scene("demo-dress-walk.toml", &sets, Some(frames))?;
+        let p = WrinklePoint {
+            wrinkles: on,
+            ms: stage_ms(&s, SURFACE_STAGES),
+            length_error: s.metrics.length_error.unwrap_or(Real::NAN),
+        };
+        let _ = writeln!(
+            log,
+            "wrinkles {on}: surface {:.2} ms, length error {:.4}",
+            p.ms, p.length_error
+        );
+        eprintln!("{}", log.lines().last().unwrap_or_default());
+        out.push(p);
+    }
+    Ok(out)
+}
+
+#[derive(Clone, Debug)]
+struct SpotPoint {
+    label: &'static str,
+    ms: Real,
+    wall_ms: Real,
+    max_mm: Real,
+    p99_mm: Real,
+    share: Real,
+}
+
+fn spot_sweep(quick: bool, log: &mut String) -> Result<Vec<SpotPoint>, String> {
+    let frames = if quick { Some(8) } else { None };
+    let runs: [(&'static str, &[&str]); 4] = [
+        (
+            "coarse only (no fine correction)",
+            &["effects.fine_collision=false"],
+        ),
+        ("fine corrected by depth maps", &[]),
+        (
+            "fine corrected by exact referee",
+            &["effects.fine_collider=\"exact\""],
+        ),
+        (
+            "depth maps, pipelined (rayon::join)",
+            &["scene.pipelined=true"],
+        ),
+    ];
+    let mut out = Vec::new();
+    for (label, sets) in runs {
+        let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+        let (s, _) = run_scene("cloth-on-spot.toml", &sets, frames)?;
+        let m = &s.metrics;
+        let p = SpotPoint {
+            label,
+            ms: frame_ms(&s),
+            wall_ms: s.loop_s * 1e3 / s.frames.max(1) as Real
+                - s.stages.get("referee").map_or(0.0, |t| t.ms_mean),
+            max_mm: m.max_penetration_m * 1e3,
+            p99_mm: m.p99_penetration_m * 1e3,
+            share: m.share_over_1mm,
+        };
+        let _ = writeln!(
+            log,
+            "spot: {label}: {:.2} ms/frame of stages, {:.2} ms/frame wall, fine penetration max {:.2} p99 {:.2} mm",
+            p.ms, p.wall_ms, p.max_mm, p.p99_mm
+        );
+        eprintln!("{}", log.lines().last().unwrap_or_default());
+        out.push(p);
+    }
+    Ok(out)
+}
+
+/// Today's date (UTC) as yyyy-mm-dd, from the system clock.
+fn today() -> String {
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    let days = (secs / 86_400) as i64;
+    // Howard Hinnant's civil-from-days.
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    let y = yoe + era * 400 + i64::from(m <= 2);
+    format!("{y:04}-{m:02}-{d:02}")
+}
+
+/// The CPU model and core count, from /proc (Linux) when readable.
+fn machine() -> String {
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|t| {
+            t.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split_once(':'))
+                .map(|(_, v)| v.trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown CPU".into());
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    format!("{cpu}, {cores} cores available")
+}
+
+/// The cheapest collider setting of a scene with max penetration <= 1 mm and stretch <= 1.03.
+fn cheapest(points: &[ColliderPoint], scene: &str) -> String {
+    let ok: Vec<&ColliderPoint> = points
+        .iter()
+        .filter(|p| p.scene == scene && p.max_mm <= 1.0 && p.stretch <= 1.03)
+        .collect();
+    match ok.iter().min_by(|a, b| a.ms.total_cmp(&b.ms)) {
+        Some(p) => format!("{} ({:.2} ms/frame)", p.label, p.ms),
+        None => {
+            let best = points
+                .iter()
+                .filter(|p| p.scene == scene)
+                .min_by(|a, b| a.max_mm.total_cmp(&b.max_mm));
+            match best {
+                Some(b) => format!(
+                    "none meets both (least penetration: {} at {:.2} mm, stretch {:.3}, {:.2} ms/frame)",
+                    b.label, b.max_mm, b.stretch, b.ms
+                ),
+                None => "no points".into(),
+            }
+        }
+    }
+}
+
+pub fn run_all(quick: bool, out: &Path, summary: Option<&Path>) -> Result<(), String> {
+    std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
+    let started = Instant::now();
+    let mut log = String::new();
+    let colliders = collider_sweep(quick, &mut log)?;
+    let (integrators, stability, h_ref_ms) = integrator_sweep(quick, &mut log)?;
+    let refine = refine_sweep(quick, &mut log)?;
+    let wrinkles = wrinkle_sweep(quick, &mut log)?;
+    let spot = spot_sweep(quick, &mut log)?;
+
+    // Plots.
+    let mut plots = Vec::new();
+    for scene in ["drape", "demo", "makehuman"] {
+        let pts: Vec<&ColliderPoint> = colliders.iter().filter(|p| p.scene == scene).collect();
+        for (metric, get) in [
+            (
+                "max",
+                (|p: &ColliderPoint| p.max_mm) as fn(&ColliderPoint) -> Real,
+            ),
+            ("p99", |p: &ColliderPoint| p.p99_mm),
+        ] {
+            let series = vec![Series {
+                name: format!("{scene} colliders"),
+                points: pts
+                    .iter()
+                    .map(|p| (p.ms, get(p), p.label.clone()))
+                    .collect(),
+            }];
+            let file = format!("colliders-{scene}-{metric}.svg");
+            scatter(
+                &out.join(&file),
+                &format!("{scene}: {metric} penetration against time"),
+                "ms per frame (all stages but the referee)",
+                &format!("{metric} penetration (mm)"),
+                Scale::Linear,
+                Scale::Linear,
+                &series,
+                true,
+            )?;
+            plots.push(file);
+        }
+    }
+    let series: Vec<Series> = KINDS
+        .iter()
+        .map(|k| Series {
+            name: k.as_str().into(),
+            points: integrators
+                .iter()
+                .filter(|p| p.integrator == k.as_str() && p.error_mm.is_finite())
+                .map(|p| (p.ms, p.error_mm, format!("{:.2}", p.h_ms)))
+                .collect(),
+        })
+        .collect();
+    scatter(
+        &out.join("integrators.svg"),
+        "drape: error against a converged reference (labels: step in ms)",
+        "ms per frame",
+        "RMS position error (mm)",
+        Scale::Log { floor: 1e-3 },
+        Scale::Log { floor: 1e-6 },
+        &series,
+        true,
+    )?;
+    plots.push("integrators.svg".into());
+    let series: Vec<Series> = KINDS
+        .iter()
+        .map(|k| Series {
+            name: k.as_str().into(),
+            points: stability
+                .iter()
+                .filter(|p| p.integrator == k.as_str())
+                .filter_map(|p| p.largest_ms.map(|h| (p.k_scale, h, String::new())))
+                .collect(),
+        })
+        .collect();
+    scatter(
+        &out.join("stability.svg"),
+        "drape: largest stable step against stretch stiffness",
+        "stretch stiffness (times the scene's)",
+        "largest stable step (ms)",
+        Scale::Log { floor: 1e-3 },
+        Scale::Log { floor: 1e-3 },
+        &series,
+        false,
+    )?;
+    plots.push("stability.svg".into());
+    scatter(
+        &out.join("refine.svg"),
+        "demo: surface deviation from the finest level against time (labels: level)",
+        "ms per frame (surface stages)",
+        "mean deviation (mm)",
+        Scale::Linear,
+        Scale::Linear,
+        &[Series {
+            name: "refine level".into(),
+            points: refine
+                .iter()
+                .map(|p| (p.ms, p.mean_dev_mm, format!("L{}", p.level)))
+                .collect(),
+        }],
+        true,
+    )?;
+    plots.push("refine.svg".into());
+    scatter(
+        &out.join("wrinkles.svg"),
+        "demo: length restoration against time",
+        "ms per frame (surface stages)",
+        "mean |fine length - rest| / rest",
+        Scale::Linear,
+        Scale::Linear,
+        &[Series {
+            name: "wrinkles".into(),
+            points: wrinkles
+                .iter()
+                .map(|p| {
+                    (
+                        p.ms,
+                        p.length_error,
+                        if p.wrinkles { "on" } else { "off" }.into(),
+                    )
+                })
+                .collect(),
+        }],
+        true,
+    )?;
+    plots.push("wrinkles.svg".into());
+
+    // Every curve must have points.
+    let mut empty = Vec::new();
+    for scene in ["drape", "demo", "makehuman"] {
+        if !colliders.iter().any(|p| p.scene == scene) {
+            empty.push(format!("colliders on {scene}"));
+        }
+    }
+    for k in KINDS {
+        if !integrators
+            .iter()
+            .any(|p| p.integrator == k.as_str() && p.error_mm.is_finite())
+        {
+            empty.push(format!("integrator error of {}", k.as_str()));
+        }
+        if !stability
+            .iter()
+            .any(|p| p.integrator == k.as_str() && p.largest_ms.is_some())
+        {
+            empty.push(format!("stable steps of {}", k.as_str()));
+        }
+    }
+    if refine.len() != 5 {
+        empty.push("refine levels".into());
+    }
+    if wrinkles.iter().any(|p| !p.length_error.is_finite()) {
+        empty.push("wrinkle length error".into());
+    }
+    if spot.len() != 4 {
+        empty.push("spot".into());
+    }
+
+    // Report.
+    let mut r = String::new();
+    let mode = if quick {
+        " (quick: few frames, few settings)"
+    } else {
+        ""
+    };
+    let _ = writeln!(r, "# What accuracy costs in time{mode}\n");
+    let _ = writeln!(
+        r,
+        "Machine: {}. Date: {}. Sweep time {:.0} s. Times are means per frame of one run on a noisy machine; compare them as ratios.\n",
+        machine(),
+        today(),
+        started.elapsed().as_secs_f64()
+    );
+    let _ = writeln!(r, "## (a) Colliders\n");
+    let _ = writeln!(
+        r,
+        "Penetration of the output surface (fine when the scene refines) by the exact referee, over all frames; ms are all stages but the referee; collider ms is the collider update plus the fine collision stage.\n"
+    );
+    let _ = writeln!(
+        r,
+        "| scene | collider | ms/frame | collider ms | max mm | p99 mm | share > 1 mm | max stretch |\n|---|---|---|---|---|---|---|---|"
+    );
+    for p in &colliders {
+        let _ = writeln!(
+            r,
+            "| {} | {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.4} | {:.3} |",
+            p.scene, p.label, p.ms, p.collider_ms, p.max_mm, p.p99_mm, p.share, p.stretch
+        );
+    }
+    let _ = writeln!(
+        r,
+        "\nCheapest setting with max penetration <= 1 mm and stretch <= 1.03:\n"
+    );
+    for scene in ["drape", "demo", "makehuman"] {
+        let _ = writeln!(r, "- {scene}: {}", cheapest(&colliders, scene));
+    }
+    let _ = writeln!(r, "\n## (b) Integrators\n");
+    let _ = writeln!(
+        r,
+        "Drape, fixed substep (no automatic step, no retries), error = RMS particle distance from RK4 at {h_ref_ms} ms after the same simulated time.\n"
+    );
+    let _ = writeln!(
+        r,
+        "| integrator | step ms | ms/frame | RMS error mm | stable |\n|---|---|---|---|---|"
+    );
+    for p in &integrators {
+        let _ = writeln!(
+            r,
+            "| {} | {:.3} | {:.2} | {:.4} | {} |",
+            p.integrator, p.h_ms, p.ms, p.error_mm, p.stable
+        );
+    }
+    let _ = writeln!(
+        r,
+        "\nLargest stable step (0.25 ms times powers of sqrt 2, up to a 1/60 s frame) against stretch stiffness, with the strain limit off (it would hide an unstable integrator):\n\n| integrator | stiffness x | largest stable step ms |\n|---|---|---|"
+    );
+    for p in &stability {
+        let _ = writeln!(
+            r,
+            "| {} | {} | {} |",
+            p.integrator,
+            p.k_scale,
+            p.largest_ms
+                .map_or("none".to_string(), |h| format!("{h:.2}"))
+        );
+    }
+    let _ = writeln!(r, "\n## (c) Refinement level (demo)\n");
+    let _ = writeln!(
+        r,
+        "| level | fine vertices | surface ms | max deviation mm | mean deviation mm |\n|---|---|---|---|---|"
+    );
+    for p in &refine {
+        let _ = writeln!(
+            r,
+            "| {} | {} | {:.2} | {:.3} | {:.3} |",
+            p.level, p.fine_vertices, p.ms, p.max_dev_mm, p.mean_dev_mm
+        );
+    }
+    let _ = writeln!(r, "\n## (d) Wrinkles (demo, level 2)\n");
+    let _ = writeln!(r, "| wrinkles | surface ms | length error |\n|---|---|---|");
+    for p in &wrinkles {
+        let _ = writeln!(
+            r,
+            "| {} | {:.2} | {:.4} |",
+            p.wrinkles, p.ms, p.length_error
+        );
+    }
+    let _ = writeln!(r, "\n## (e) P4: cloth on spot\n");
+    let _ = writeln!(
+        r,
+        "| run | stage ms/frame | wall ms/frame | fine max mm | fine p99 mm | share > 1 mm |\n|---|---|---|---|---|---|"
+    );
+    for p in &spot {
+        let _ = writeln!(
+            r,
+            "| {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.4} |",
+            p.label, p.ms, p.wall_ms, p.max_mm, p.p99_mm, p.share
+        );
+    }
+    let _ = writeln!(r, "\n## Plots\n");
+    for f in &plots {
+        let _ = writeln!(r, "![{f}]({f})\n");
+    }
+    let _ = writeln!(r, "## Log\n\n```\n{log}```");
+    write_atomic(&out.join("report.md"), &r)?;
+    if let Some(path) = summary {
+        write_atomic(path, &r)?;
+    }
+    eprintln!("tradeoff: wrote {}", out.join("report.md").display());
+    if !empty.is_empty() {
+        return Err(format!("curves without points: {}", empty.join(", ")));
+    }
+    Ok(())
+}
+
+/// Writes `text` to a temporary file beside `path`, then renames it into place.
+fn write_atomic(path: &Path, text: &str) -> Result<(), String> {
+    if let Some(dir) = path.parent()
+        && !dir.as_os_str().is_empty()
+    {
+        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    }
+    let tmp = path.with_extension("md.tmp");
+    std::fs::write(&tmp, text).map_err(|e| format!("{}: {e}", tmp.display()))?;
+    std::fs::rename(&tmp, path).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dates_are_civil() {
+        let d = today();
+        assert_eq!(d.len(), 10);
+        assert!(d.starts_with("20"), "{d}");
+    }
+}
