@@ -305,9 +305,10 @@ impl Pipeline {
         }
         // The grab takes the particle nearest its first point once the frame reaches its time.
         if let Some(path) = &self.grab
-            && path[0].0 <= t
+            && let Some(&(t0, start)) = path.first()
+            && t0 <= t
+            && !c.frame.positions.is_empty()
         {
-            let start = path[0].1;
             let x = &c.frame.positions;
             let particle = (0..x.len())
                 .min_by(|&a, &b| {
