@@ -60,8 +60,11 @@ impl ExactCollider {
             TriMesh::with_flags(pts, self.body.triangles.clone(), TriMeshFlags::ORIENTED).ok();
     }
 
-    /// Closest point on the body surface and signed distance.
+    /// Closest point on the body surface and signed distance (`None` for a non-finite point).
     pub fn project(&self, p: &Vec3) -> Option<Projection> {
+        if !tryon_core::math::is_finite(p) {
+            return None;
+        }
         let shape = self.shape.as_ref()?;
         let (proj, (face, loc)) =
             shape.project_local_point_and_get_location(&Point::from(*p), false);
@@ -104,7 +107,9 @@ impl Collider for ExactCollider {
 
     fn resolve(&mut self, points: &mut [Vec3], contacts: &mut Vec<Contact>) {
         for (i, p) in points.iter_mut().enumerate() {
-            let Some(pr) = self.project(p) else { return };
+            let Some(pr) = self.project(p) else {
+                continue;
+            };
             if pr.distance >= self.thickness {
                 continue;
             }

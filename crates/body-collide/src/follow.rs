@@ -47,10 +47,19 @@ fn frame_of(body: &BodyMesh, f: usize) -> (Vec3, Vec3, Vec3, Vec3) {
     (v0, v1 - v0, v2 - v0, body.face_normals[f])
 }
 
-/// Closest point on the faces around `v` and around its neighbours (the two-ring), which finds
-/// the right face even where long triangles put the closest point outside the nearest vertex's fan.
+/// Closest point on the faces around `v`, and when that lands on the fan's rim, on the faces around
+/// its neighbours too (the two-ring), which finds the right face even where long triangles put the
+/// closest point outside the nearest vertex's fan.
 fn closest_near(body: &BodyMesh, p: &Vec3, v: u32) -> (u32, Vec3) {
-    let (mut f, mut q, _) = body.closest_on_fan(p, v);
+    let (mut f, mut q, bary) = body.closest_on_fan(p, v);
+    let on_rim = body
+        .triangles
+        .get(f as usize)
+        .and_then(|t| t.iter().position(|&c| c == v))
+        .is_none_or(|k| bary[k] <= 1e-12);
+    if !on_rim {
+        return (f, q);
+    }
     let mut best = (q - p).norm_squared();
     for &w in body.ring.row(v as usize) {
         let (f2, q2, _) = body.closest_on_fan(p, w);

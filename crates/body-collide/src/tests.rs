@@ -229,6 +229,26 @@ proptest! {
             prop_assert!(pa.distance == Real::INFINITY || (pa.normal.norm() - 1.0).abs() < 1e-9);
         }
     }
+
+    /// `probe_near`'s shortcuts (the height over a convex fan's highest plane) change nothing a
+    /// caller within `reach` can see: points nearer than `reach` get the full probe's distance and
+    /// normal, the others a distance of at least `reach`.
+    #[test]
+    fn near_probes_match_full_probes_within_reach(m in body_strategy(), s in seeds(), reach in 0.001..0.05f64) {
+        let pts = points_near(&m, &s);
+        let which: Vec<u32> = (0..pts.len() as u32).collect();
+        let (mut full, mut near) = (Vec::new(), Vec::new());
+        NearestVertexCollider::new(&m, 0.0).unwrap().probe(&pts, &which, &mut full);
+        NearestVertexCollider::new(&m, 0.0).unwrap().probe_near(&pts, &which, reach, &mut near);
+        for (k, (f, n)) in full.iter().zip(&near).enumerate() {
+            if f.distance < reach {
+                prop_assert!((f.distance - n.distance).abs() < 1e-9, "point {}: {} vs {}", k, f.distance, n.distance);
+                prop_assert!((f.normal - n.normal).norm() < 1e-6, "point {}: normals {:?} vs {:?}", k, f.normal, n.normal);
+            } else {
+                prop_assert!(n.distance >= reach, "point {}: {} under reach {}", k, n.distance, reach);
+            }
+        }
+    }
 }
 
 proptest! {
@@ -365,4 +385,68 @@ fn tracking_sees_every_piece_of_the_body() {
         "{:?}",
         pts[0]
     );
+}
+
+/// The referee takes non-finite points without panicking: it has nothing to say about them, and
+/// still resolves the finite points after them.
+#[test]
+fn the_referee_skips_non_finite_points() {
+    let sphere = icosphere(0.5, 3, Vec3::zeros());
+    let mut referee = ExactCollider::new(&sphere, 0.0).unwrap();
+    let mut pts = vec![
+        Vec3::new(Real::NAN, 0.0, 0.0),
+        Vec3::new(0.0, Real::INFINITY, 0.0),
+        Vec3::new(0.0, 0.1, 0.0),
+    ];
+    assert!(referee.signed_distance(&pts[0]).is_none());
+    let mut contacts = Vec::new();
+    referee.resolve(&mut pts, &mut contacts);
+    assert_eq!(contacts.len(), 1);
+    assert_eq!(contacts[0].point, 2);
+    assert!(referee.signed_distance(&pts[2]).unwrap() > -1e-9);
+    let mut probes = Vec::new();
+    referee.probe(&pts, &[0, 1, 2], &mut probes);
+    assert_eq!(probes[0], tryon_core::stages::Probe::FAR);
+}
+
+/// A closed body with concave folds: an icosphere whose radius ripples with direction.
+fn bumpy_sphere(sub: u32, amp: Real, waves: Real) -> PolyMesh {
+    let mut m = icosphere(0.4, sub, Vec3::zeros());
+    for p in &mut m.positions {
+        let u = p.normalize();
+        let r = 0.4 * (1.0 + amp * (waves * u.x).sin() * (waves * u.y).cos());
+        *p = u * r;
+    }
+    m
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(24))]
+
+    /// On a body with concave folds (where P1's test alone misses points, and its push along one
+    /// plane's normal can leave a point behind the fold's other side), resolution leaves nothing
+    /// deeper than a micrometre inside by the referee.
+    #[test]
+    fn nothing_inside_a_concave_body_after_resolution(amp in 0.05..0.25f64, waves in 2.0..5.0f64, s in seeds()) {
+        let m = bumpy_sphere(4, amp, waves);
+        let referee = ExactCollider::new(&m, 0.0).unwrap();
+        let mut tracker = NearestVertexCollider::new(&m, 0.0).unwrap();
+        // Points within a few centimetres of the surface, on both sides.
+        let mut pts: Vec<Vec3> = s
+            .iter()
+            .enumerate()
+            .map(|(i, r)| {
+                let q = m.positions[(i * 7919) % m.positions.len()];
+                q + Vec3::new(r[0], r[1], r[2]) * 0.03
+            })
+            .collect();
+        let inside_before = pts.iter().filter(|p| referee.signed_distance(p).unwrap() < -1e-6).count();
+        let mut contacts = Vec::new();
+        tracker.resolve(&mut pts, &mut contacts);
+        prop_assert!(contacts.len() >= inside_before, "{} contacts for {} points inside", contacts.len(), inside_before);
+        for (k, p) in pts.iter().enumerate() {
+            let d = referee.signed_distance(p).unwrap();
+            prop_assert!(d > -1e-6, "point {} still {} m inside", k, -d);
+        }
+    }
 }

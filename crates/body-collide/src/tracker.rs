@@ -11,6 +11,40 @@ use tryon_core::math::{Real, Vec3, closest_point_on_triangle};
 /// How far from its nearest body vertex a point can be and still be tested for being inside a
 /// concave crease (m).
 const CREASE_REACH: Real = 0.05;
+
+/// A neighbour this little in front of a face's plane (relative to its distance) still counts as
+/// on the plane when judging whether a fan is convex.
+const FLAT: Real = 1e-4;
+
+/// How many times a point is tested and moved out in one `resolve` (folds can need more than one).
+const RESOLVE_ROUNDS: usize = 3;
+
+/// What P1's test says at one vertex.
+enum FanTest {
+    /// Behind every face: the face the point is nearest behind and its height over it.
+    Inside(u32, Real),
+    /// In front of every face: outside whatever the fan's shape.
+    Front(Highest),
+    /// Behind some faces, in front of others.
+    Mixed(Highest),
+}
+
+/// A point found inside: the face it is judged against, its height over the surface there
+/// (negative inside), the outward normal, and where it goes to be outside.
+#[derive(Clone, Copy)]
+struct Hit {
+    face: u32,
+    height: Real,
+    normal: Vec3,
+    target: Vec3,
+    /// Moved out of a convex fan: in front of one of its planes, so outside for good.
+    settled: bool,
+}
+
+/// The face whose plane a point is highest above, and that height. Over a convex fan no point of
+/// the fan is nearer than this.
+#[derive(Clone, Copy)]
+struct Highest(u32, Real);
 use tryon_core::mesh::PolyMesh;
 use tryon_core::stages::{Collider, Probe};
 
@@ -34,6 +68,8 @@ pub struct NearestVertexCollider {
     /// vertex on each of these pieces (`nearest_more`, pieces fastest).
     extra_pieces: Vec<u32>,
     nearest_more: Vec<u32>,
+    /// Per body vertex: 0 not yet known, 1 convex fan, 2 not (reset when the body moves).
+    fan_convex: Vec<std::cell::Cell<u8>>,
 }
 
 impl NearestVertexCollider {
@@ -43,7 +79,6 @@ impl NearestVertexCollider {
         let bounds = body.bounds();
         let extra_pieces = pieces(&body).into_iter().skip(1).collect();
         Ok(NearestVertexCollider {
-            body,
             thickness,
             nearest: Vec::new(),
             cull_margin: 0.05,
@@ -52,6 +87,8 @@ impl NearestVertexCollider {
             bounds,
             extra_pieces,
             nearest_more: Vec::new(),
+            fan_convex: vec![std::cell::Cell::new(0); body.positions.len()],
+            body,
         })
     }
 
@@ -109,22 +146,88 @@ impl NearestVertexCollider {
             && p.z <= hi.z + m
     }
 
-    /// P1's inside test: behind every face around vertex `v` (offset by the thickness). Returns the
-    /// face whose plane the point is nearest behind and the point's height over that plane.
+    /// P1's inside test at vertex `v` (offset by the thickness): inside when behind every face of
+    /// the fan (with the face whose plane the point is nearest behind and its height over it),
+    /// outside for sure when in front of every face, and undecided when behind some and in front
+    /// of others (a convex fan says outside then; a concave one needs the crease test).
     #[inline]
-    fn inside(&self, p: &Vec3, v: u32) -> Option<(u32, Real)> {
+    fn fan_test(&self, p: &Vec3, v: u32) -> FanTest {
         let rel = p - self.body.positions[v as usize];
         let mut best = (u32::MAX, Real::NEG_INFINITY);
-        for &f in self.body.vertex_faces.row(v as usize) {
+        let mut top = Highest(u32::MAX, Real::NEG_INFINITY);
+        let mut front = 0usize;
+        let faces = self.body.vertex_faces.row(v as usize);
+        for &f in faces {
             let h = rel.dot(&self.body.face_normals[f as usize]);
-            if h >= self.thickness {
-                return None;
+            if h > top.1 {
+                top = Highest(f, h);
             }
-            if h > best.1 {
+            if h >= self.thickness {
+                front += 1;
+            } else if h > best.1 {
                 best = (f, h);
             }
         }
-        (best.0 != u32::MAX).then_some(best)
+        if front == 0 && best.0 != u32::MAX {
+            FanTest::Inside(best.0, best.1)
+        } else if front == faces.len() {
+            FanTest::Front(top)
+        } else {
+            FanTest::Mixed(top)
+        }
+    }
+
+    /// Whether the fan of faces around `v` bounds a convex cone (every neighbour on or behind
+    /// every face's plane), cached until the body moves. Behind part of a convex fan is outside.
+    fn fan_is_convex(&self, v: u32) -> bool {
+        if std::env::var("NOCVX").is_ok() {
+            return false;
+        }
+        let cell = &self.fan_convex[v as usize];
+        match cell.get() {
+            1 => return true,
+            2 => return false,
+            _ => {}
+        }
+        let x = self.body.positions[v as usize];
+        let convex = self.body.vertex_faces.row(v as usize).iter().all(|&f| {
+            let n = self.body.face_normals[f as usize];
+            self.body.ring.row(v as usize).iter().all(|&w| {
+                let r = self.body.positions[w as usize] - x;
+                r.dot(&n) <= FLAT * r.norm()
+            })
+        });
+        cell.set(if convex { 1 } else { 2 });
+        convex
+    }
+
+    /// P1's test, with the crease test where the fan is not convex: whether `p` is inside near
+    /// vertex `v`, and where to move it. Over a convex fan P1's push along the nearest plane's
+    /// normal is exact; in a fold it can land the point behind the fold's other side, so there the
+    /// point goes to the closest point of the fan, `skin` out along the pseudo-normal.
+    #[inline]
+    fn inside_any(&self, p: &Vec3, v: u32, skin: Real) -> Option<Hit> {
+        match self.fan_test(p, v) {
+            FanTest::Inside(f, h) => {
+                let n = self.body.face_normals[f as usize];
+                let convex = self.fan_is_convex(v);
+                let p1 = Hit {
+                    face: f,
+                    height: h,
+                    normal: n,
+                    target: p + n * (skin - h),
+                    settled: convex,
+                };
+                if convex {
+                    Some(p1)
+                } else {
+                    Some(self.inside_crease(p, v, skin).unwrap_or(p1))
+                }
+            }
+            FanTest::Front(_) => None,
+            FanTest::Mixed(_) if self.fan_is_convex(v) => None,
+            FanTest::Mixed(_) => self.inside_crease(p, v, skin),
+        }
     }
 
     /// The crease test: P1's test misses points inside a concave crease (shoulder against neck,
@@ -132,7 +235,7 @@ impl NearestVertexCollider {
     /// others. Such a point is inside when it is behind the closest point of the fan, judged by the
     /// pseudo-normal there (the face normal, or the mean of the faces sharing the closest edge or
     /// vertex). Returns the face and the point's height over the closest point along that normal.
-    fn inside_crease(&self, p: &Vec3, v: u32, skin: Real) -> Option<(u32, Real, Vec3)> {
+    fn inside_crease(&self, p: &Vec3, v: u32, skin: Real) -> Option<Hit> {
         if (p - self.body.positions[v as usize]).norm_squared() > CREASE_REACH * CREASE_REACH {
             return None;
         }
@@ -154,7 +257,21 @@ impl NearestVertexCollider {
             n = n.try_normalize(1e-12)?;
         }
         let h = (p - q).dot(&n);
-        (h < skin).then_some((f, h, n))
+        (h < skin).then_some(Hit {
+            face: f,
+            height: h,
+            normal: n,
+            target: q + n * skin,
+            settled: false,
+        })
+    }
+
+    /// Whether `p` projects along face `f`'s normal into the face (its edges included).
+    fn projects_into(&self, f: u32, p: &Vec3) -> bool {
+        let [a, b, c] = self.body.corners(f as usize);
+        let n = self.body.face_normals[f as usize];
+        let inside_edge = |u: &Vec3, w: &Vec3| (w - u).cross(&(p - u)).dot(&n) >= 0.0;
+        inside_edge(&a, &b) && inside_edge(&b, &c) && inside_edge(&c, &a)
     }
 
     /// Barycentric coordinates of `q` (on or near the plane of triangle `f`), clamped into the triangle.
@@ -184,50 +301,80 @@ impl Collider for NearestVertexCollider {
     }
 
     fn update(&mut self, frame: &BodyFrame) {
+        // A body that did not move keeps its shape-derived caches.
+        let same_shape = frame.positions == self.body.positions;
         if self.body.set_frame(frame).is_err() {
             self.rejected_frames += 1;
+            return;
         }
-        self.bounds = self.body.bounds();
+        if !same_shape {
+            self.bounds = self.body.bounds();
+            self.fan_convex.iter().for_each(|c| c.set(0));
+        }
     }
 
     fn resolve(&mut self, points: &mut [Vec3], contacts: &mut Vec<Contact>) {
         self.track(points);
+        let k = self.extra_pieces.len();
         for (i, p) in points.iter_mut().enumerate() {
             if !self.near_bounds(p) {
                 continue;
             }
-            // Inside any piece (the shallowest hit when in several).
-            let mut hit: Option<(u32, Real, Vec3)> = None;
-            for v in self.candidates(i) {
-                let h = match self.inside(p, v) {
-                    Some((f, h)) => Some((f, h, self.body.face_normals[f as usize])),
-                    None => self.inside_crease(p, v, self.thickness),
+            let mut contact: Option<(u32, Real, Vec3)> = None;
+            for round in 0..RESOLVE_ROUNDS {
+                if round > 0 {
+                    // Moved onto one face's plane, the point may still be inside a neighbouring
+                    // fold: track again from where it is now and test again.
+                    self.nearest[i] = self.body.climb(p, self.nearest[i]);
+                    for j in i * k..(i + 1) * k {
+                        self.nearest_more[j] = self.body.climb(p, self.nearest_more[j]);
+                    }
+                }
+                // Inside any piece (the shallowest hit when in several).
+                let mut hit: Option<Hit> = None;
+                for v in self.candidates(i) {
+                    if let Some(h) = self.inside_any(p, v, self.thickness)
+                        && hit.is_none_or(|b| h.height > b.height)
+                    {
+                        hit = Some(h);
+                    }
+                }
+                let Some(h) = hit else {
+                    break;
                 };
-                if let Some(h) = h
-                    && hit.is_none_or(|b| h.1 > b.1)
-                {
-                    hit = Some(h);
+                *p = h.target;
+                // The contact keeps the first (deepest) test's depth and the last face and normal.
+                let depth = contact.map_or((-h.height).max(0.0), |c| c.1);
+                contact = Some((h.face, depth, h.normal));
+                if h.settled && k == 0 {
+                    break;
                 }
             }
-            let Some((f, height, n)) = hit else {
+            let Some((f, depth, n)) = contact else {
                 continue;
             };
-            *p += n * (self.thickness - height);
             let bary = self.bary(f, p);
             contacts.push(Contact {
                 point: i as u32,
                 face: f,
                 bary,
                 normal: n,
-                depth: (-height).max(0.0),
+                depth,
                 body_velocity: self.body.velocity_at(f as usize, bary),
             });
         }
     }
 
-    /// Tracks each listed point's nearest vertex (hill-climb from its last one), then P1's inside
-    /// test there (and the crease test); outside points get their distance to the vertex's fan.
+    /// `probe_near` with no reach: every outside point gets its distance to its vertex's fan.
     fn probe(&mut self, points: &[Vec3], which: &[u32], out: &mut Vec<Probe>) {
+        self.probe_near(points, which, Real::INFINITY, out);
+    }
+
+    /// Tracks each listed point's nearest vertex (hill-climb from its last one), then P1's inside
+    /// test there (and the crease test); outside points get their distance to the vertex's fan,
+    /// or over a convex fan, when already the height over one of its planes is `reach` or more,
+    /// that height (no point of the fan is nearer).
+    fn probe_near(&mut self, points: &[Vec3], which: &[u32], reach: Real, out: &mut Vec<Probe>) {
         out.clear();
         if self.probe_nearest.len() != points.len() {
             self.probe_nearest = points
@@ -243,29 +390,51 @@ impl Collider for NearestVertexCollider {
             }
             let v = self.body.climb(p, self.probe_nearest[k as usize]);
             self.probe_nearest[k as usize] = v;
-            if let Some((f, h)) = self.inside(p, v) {
+            let top = match self.fan_test(p, v) {
+                FanTest::Inside(f, h) => {
+                    out.push(Probe {
+                        distance: h,
+                        normal: self.body.face_normals[f as usize],
+                    });
+                    continue;
+                }
+                FanTest::Front(top) => top,
+                FanTest::Mixed(top) => {
+                    if !self.fan_is_convex(v)
+                        && let Some(h) = self.inside_crease(p, v, 0.0)
+                    {
+                        out.push(Probe {
+                            distance: h.height,
+                            normal: h.normal,
+                        });
+                        continue;
+                    }
+                    top
+                }
+            };
+            // Over a convex fan the height over the highest plane bounds the distance from below,
+            // and is the distance when the point projects into that face.
+            if top.0 != u32::MAX
+                && self.fan_is_convex(v)
+                && (top.1 >= reach || self.projects_into(top.0, p))
+            {
                 out.push(Probe {
-                    distance: h,
-                    normal: self.body.face_normals[f as usize],
+                    distance: top.1,
+                    normal: self.body.face_normals[top.0 as usize],
                 });
-            } else if let Some((_, h, n)) = self.inside_crease(p, v, 0.0) {
-                out.push(Probe {
-                    distance: h,
-                    normal: n,
-                });
-            } else {
-                let (f, q, _) = self.body.closest_on_fan(p, v);
-                let d = p - q;
-                let n = d.norm();
-                out.push(Probe {
-                    distance: n,
-                    normal: if n > 1e-12 {
-                        d / n
-                    } else {
-                        self.body.face_normals[f as usize]
-                    },
-                });
+                continue;
             }
+            let (f, q, _) = self.body.closest_on_fan(p, v);
+            let d = p - q;
+            let n = d.norm();
+            out.push(Probe {
+                distance: n,
+                normal: if n > 1e-12 {
+                    d / n
+                } else {
+                    self.body.face_normals[f as usize]
+                },
+            });
         }
     }
 

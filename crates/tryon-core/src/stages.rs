@@ -61,9 +61,19 @@ pub trait Collider: Send {
             }
             out.push(Probe {
                 distance: d,
-                normal: g.try_normalize(1e-12).unwrap_or(Vec3::zeros()),
+                normal: g
+                    .try_normalize(1e-12)
+                    .filter(crate::math::is_finite)
+                    .unwrap_or(Vec3::zeros()),
             });
         }
+    }
+    /// As [`Collider::probe`], for a caller that only cares about points nearer than `reach`: a
+    /// point at least `reach` outside may be given any distance >= `reach` (a cheaper bound). The
+    /// default is `probe`.
+    fn probe_near(&mut self, points: &[Vec3], which: &[u32], reach: Real, out: &mut Vec<Probe>) {
+        let _ = reach;
+        self.probe(points, which, out);
     }
 }
 

@@ -596,7 +596,12 @@ impl Detail {
         let margin = self.params.margin;
         let mut raised = 0;
         for pass in 0..2 {
-            collider.probe(&fine.positions, &self.which, &mut self.probes);
+            collider.probe_near(
+                &fine.positions,
+                &self.which,
+                margin.max(skin),
+                &mut self.probes,
+            );
             let mut again = Vec::new();
             for (k, &v) in self.which.iter().enumerate() {
                 let pr = self.probes[k];
@@ -604,7 +609,10 @@ impl Detail {
                 if pass == 0 && pr.distance < margin {
                     self.touched[v] = self.stamp;
                 }
-                if !(pr.distance < skin) || !pr.distance.is_finite() {
+                if !(pr.distance < skin)
+                    || !pr.distance.is_finite()
+                    || !tryon_core::math::is_finite(&pr.normal)
+                {
                     continue;
                 }
                 let need = skin - pr.distance;
