@@ -180,9 +180,6 @@ impl NearestVertexCollider {
     /// Whether the fan of faces around `v` bounds a convex cone (every neighbour on or behind
     /// every face's plane), cached until the body moves. Behind part of a convex fan is outside.
     fn fan_is_convex(&self, v: u32) -> bool {
-        if std::env::var("NOCVX").is_ok() {
-            return false;
-        }
         let cell = &self.fan_convex[v as usize];
         match cell.get() {
             1 => return true,

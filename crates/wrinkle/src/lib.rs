@@ -131,6 +131,10 @@ pub struct Detail {
     vertex_edges: Csr,
     /// Neighbours of each fine vertex in the fine mesh.
     ring: Csr,
+    /// Each fine edge once (i < j), for the passes that visit edges rather than vertices.
+    fine_edges: Vec<[u32; 2]>,
+    /// Largest height difference allowed across each fine edge this frame (m).
+    allowed: Vec<Real>,
     /// Interior fine vertices of each coarse triangle.
     interior: Csr,
     /// Carried wrinkle height of each fine vertex (m).
@@ -317,6 +321,11 @@ impl Detail {
         }
         ring_pairs.sort_unstable();
         ring_pairs.dedup();
+        let fine_edges: Vec<[u32; 2]> = ring_pairs
+            .iter()
+            .filter(|(i, j)| i < j)
+            .map(|&(i, j)| [i, j])
+            .collect();
         let ring = csr(m, &mut ring_pairs);
         let interior = csr(tris.len(), &mut interior_rows);
         Ok(Detail {
@@ -331,6 +340,8 @@ impl Detail {
             tri_edges,
             vertex_edges,
             ring,
+            allowed: Vec::with_capacity(fine_edges.len()),
+            fine_edges,
             interior,
             height: vec![0.0; m],
             raise: vec![0.0; m],
@@ -472,17 +483,23 @@ impl Detail {
         let nf = fine.positions.len();
         let x = std::mem::take(&mut fine.positions);
         self.interpolate_forces(coarse, &x);
-        // Vertical forces (eqs. 6-7).
-        for i in 0..nf {
-            let mut v = 0.0;
-            for &j in self.ring.row(i) {
-                let d = x[i] - x[j as usize];
-                let l = d.norm();
-                if l > 1e-30 {
-                    v += d.dot(&self.ef[j as usize]) / l;
-                }
+        // Vertical forces (eqs. 6-7), one length per edge.
+        self.vforce.clear();
+        self.vforce.resize(nf, 0.0);
+        for &[i, j] in &self.fine_edges {
+            let (i, j) = (i as usize, j as usize);
+            let d = x[i] - x[j];
+            let l = d.norm();
+            if l > 1e-30 {
+                let u = d / l;
+                self.vforce[i] += u.dot(&self.ef[j]);
+                self.vforce[j] -= u.dot(&self.ef[i]);
             }
-            self.vforce[i] = if v.is_finite() { v } else { 0.0 };
+        }
+        for v in &mut self.vforce {
+            if !v.is_finite() {
+                *v = 0.0;
+            }
         }
         // Required length change per coarse edge (eq. 8, section 4.3.4's sign), per coarse vertex.
         self.required_edge.clear();
@@ -561,20 +578,18 @@ impl Detail {
         // lowering the higher vertex).
         let r = self.params.max_fine_stretch;
         let slope = (r * r - 1.0).max(0.0).sqrt();
+        self.allowed.clear();
+        self.allowed.extend(self.fine_edges.iter().map(|&[i, j]| {
+            (self.reference[i as usize] - self.reference[j as usize]).norm() * slope
+        }));
         for _ in 0..2 {
-            for i in 0..nf {
-                for &j in self.ring.row(i) {
-                    let j = j as usize;
-                    if j < i {
-                        continue;
-                    }
-                    let allowed = (self.reference[i] - self.reference[j]).norm() * slope;
-                    let d = new_height[i] - new_height[j];
-                    if d > allowed {
-                        new_height[i] = new_height[j] + allowed;
-                    } else if -d > allowed {
-                        new_height[j] = new_height[i] + allowed;
-                    }
+            for (&[i, j], &allowed) in self.fine_edges.iter().zip(&self.allowed) {
+                let (i, j) = (i as usize, j as usize);
+                let d = new_height[i] - new_height[j];
+                if d > allowed {
+                    new_height[i] = new_height[j] + allowed;
+                } else if -d > allowed {
+                    new_height[j] = new_height[i] + allowed;
                 }
             }
         }
