@@ -53,9 +53,9 @@ pub fn run(args: &[String]) -> Result<(), String> {
         sizes = vec![32, 64, 128];
     }
     println!(
-        "| N | integrator | substep (ms) | median ms/frame | mean ms/frame | max stretch | max penetration (mm) | retries | rollbacks |"
+        "| N | integrator | substep (ms) | median ms/frame | mean ms/frame | max stretch | max penetration (mm) | max drift (mm) | retries | rollbacks |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
     for &n in &sizes {
         for &k in &kinds {
             let mut cfg = DrapeConfig::new(n, k);
@@ -81,18 +81,20 @@ pub fn run(args: &[String]) -> Result<(), String> {
                 }
                 if trace {
                     eprintln!(
-                        "frame {:4}/{}: {:.3} ms, stretch {:.4} at {:.3?}, contacts {}",
+                        "frame {:4}/{}: {:.3} ms, stretch {:.4} at {:.3?}, contacts {}, centroid {:.4?}, kinetic {:.2e} J",
                         f.frame,
                         f.frames,
                         f.ms,
                         f.stretch,
                         f.worst_at.as_slice(),
-                        f.contacts
+                        f.contacts,
+                        f.centroid.as_slice(),
+                        f.kinetic
                     );
                 }
             });
             println!(
-                "| {} | {} | {:.3} | {:.3} | {:.3} | {:.4} | {:.3} | {} | {} |",
+                "| {} | {} | {:.3} | {:.3} | {:.3} | {:.4} | {:.3} | {:.1} | {} | {} |",
                 r.n,
                 r.integrator,
                 r.substep * 1e3,
@@ -100,6 +102,7 @@ pub fn run(args: &[String]) -> Result<(), String> {
                 r.mean_ms,
                 r.max_stretch,
                 r.max_penetration * 1e3,
+                r.max_drift * 1e3,
                 r.steps.retries,
                 r.steps.rollbacks
             );
@@ -134,9 +137,13 @@ fn apply_set(cfg: &mut DrapeConfig, key: &str, x: f64) -> Result<(), String> {
         "thickness" => cfg.thickness = x,
         "penetration" => cfg.measure_penetration = x != 0.0,
         "friction" => p.friction = x,
+        "velocity_damping" => p.velocity_damping = x,
+        "air_drag" => p.air_drag = x,
+        "bending_rigidity" => p.bending_rigidity = x,
+        "k_bend" => p.k_bend = x,
         _ => {
             return Err(format!(
-                "--set: unknown key `{key}` (max_strain, strain_iterations, max_substep, k_scale, thickness, friction)"
+                "--set: unknown key `{key}` (max_strain, strain_iterations, strain_relaxation, tethers, max_substep, k_scale, bend_scale, compress_scale, long_range, stretch_guard, min_bend_ratio, thickness, penetration, friction, velocity_damping, air_drag, bending_rigidity, k_bend)"
             ));
         }
     }

@@ -43,6 +43,12 @@ fn spring_forces<const DAMP: bool, const RECORD: bool>(
             elastic[j] -= fe;
         }
     }
+    if !model.hinges.is_empty() {
+        crate::hinges::add_forces(&model.hinges, x, 1.0, force);
+        if RECORD {
+            crate::hinges::add_forces(&model.hinges, x, 1.0, elastic);
+        }
+    }
 }
 
 /// Accelerations of every particle at state (x, v). `force` is scratch; when `elastic` is given it
@@ -140,6 +146,10 @@ pub fn jacobian_product(
         force[i] += t;
         force[j] -= t;
     }
+    // The bending force is linear in x: its Jacobian applied to w is the force at w.
+    if cx != 0.0 {
+        crate::hinges::add_forces(&model.hinges, w, cx, force);
+    }
     let (drag, vd) = (params.air_drag, params.velocity_damping);
     for i in 0..out.len() {
         let im = model.inv_mass[i];
@@ -169,10 +179,13 @@ pub fn stiffness_bounds(model: &ClothModel) -> (Real, Real) {
             csum[p] += s.damping[k];
         }
     }
+    // Hinge rows already hold diagonal plus off-diagonal magnitudes; springs contribute k to each.
+    let mut hsum = vec![0.0; n];
+    crate::hinges::add_row_sums(&model.hinges, &mut hsum);
     let mut w2: Real = 0.0;
     let mut c: Real = 0.0;
     for i in 0..n {
-        w2 = w2.max(2.0 * ksum[i] * model.inv_mass[i]);
+        w2 = w2.max((2.0 * ksum[i] + hsum[i]) * model.inv_mass[i]);
         c = c.max(2.0 * csum[i] * model.inv_mass[i]);
     }
     (w2.sqrt(), c)
@@ -233,9 +246,11 @@ mod tests {
             air_drag: 0.7,
             velocity_damping: 0.3,
             spring_damping: 0.05,
+            bending_rigidity: 1e-3,
             ..ClothParams::default()
         };
         let m = model(&p);
+        assert!(!m.hinges.is_empty());
         let n = m.particle_count();
         // Stretch the sheet by 10% with a small shear so every spring is longer than at rest.
         let x: Vec<Vec3> = m

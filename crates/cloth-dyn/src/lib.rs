@@ -9,6 +9,7 @@
 //! that rejects and halves any substep whose state is non-finite or exploding.
 
 pub mod forces;
+pub mod hinges;
 pub mod integrator;
 pub mod lines;
 pub mod model;

@@ -167,6 +167,8 @@ pub struct ClothModel {
     pub bend_limit_springs: Vec<crate::strain::LimitSpring>,
     /// Stretch-only constraints along straight lines, coarse scales first (see [`crate::lines`]).
     pub long_range_springs: Vec<crate::strain::LimitSpring>,
+    /// Stencils of the quadratic bending model (empty unless `bending_rigidity > 0`).
+    pub hinges: Vec<crate::hinges::Hinge>,
 }
 
 impl ClothModel {
@@ -241,8 +243,11 @@ impl ClothModel {
             }
         }
         let shear = structural.end..springs.len();
-        for (a, b) in bend_pairs(mesh, &topology) {
-            add(&mut springs, a, b, params.k_bend, params.k_bend, 1.0);
+        // Flexion springs only when they do something: a stiffness or the bending limit.
+        if params.k_bend > 0.0 || params.min_bend_ratio.is_some() {
+            for (a, b) in bend_pairs(mesh, &topology) {
+                add(&mut springs, a, b, params.k_bend, params.k_bend, 1.0);
+            }
         }
         let bend = shear.end..springs.len();
 
@@ -285,7 +290,9 @@ impl ClothModel {
         } else {
             Vec::new()
         };
+        let hinges = crate::hinges::build_hinges(pos, &triangles, params.bending_rigidity);
         Ok(ClothModel {
+            hinges,
             long_range_springs,
             limit_springs: crate::strain::limit_springs(&springs, 0..shear.end, &inv_mass),
             bend_limit_springs: crate::strain::limit_springs(&springs, bend.clone(), &inv_mass),

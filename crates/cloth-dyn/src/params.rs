@@ -62,6 +62,9 @@ pub struct ClothParams {
     /// mesh is the rest shape). Below 1 the garment is worn under a little tension, so that friction
     /// can hold it (a waistband that is exactly its modelled size grips nothing).
     pub rest_scale: Real,
+    /// Bending rigidity (N m) of Bergou et al.'s quadratic bending model over the triangulated
+    /// cloth (see [`crate::hinges`]); 0 leaves it out. It assumes a flat rest shape.
+    pub bending_rigidity: Real,
 }
 
 impl Default for ClothParams {
@@ -91,6 +94,7 @@ impl Default for ClothParams {
             max_halvings: 16,
             mass_floor: 0.0,
             rest_scale: 1.0,
+            bending_rigidity: 0.0,
         }
     }
 }
@@ -129,6 +133,7 @@ impl ClothParams {
             ("air_drag", self.air_drag),
             ("velocity_damping", self.velocity_damping),
             ("friction", self.friction),
+            ("bending_rigidity", self.bending_rigidity),
         ];
         for (name, value) in nonneg {
             if !(value.is_finite() && value >= 0.0) {
