@@ -217,7 +217,10 @@ fn stretch_guard_bounds_the_impact_peak_and_reports_its_retries() {
         let mut cfg = DrapeConfig::new(24, IntegratorKind::Rk4);
         cfg.duration = 1.0;
         cfg.measure_penetration = false;
+        // A weak limit (2 passes to 1.02, no long-range lines) that the impact overwhelms.
         cfg.params.strain_iterations = 2;
+        cfg.params.max_strain = Some(1.02);
+        cfg.params.long_range = false;
         cfg.params.stretch_guard = guard;
         DrapeScene::new(cfg).unwrap().run(|_| {})
     };
@@ -241,8 +244,7 @@ fn stretch_guard_bounds_the_impact_peak_and_reports_its_retries() {
 /// into the sheet: at N = 64 it hopped and slid 0.18 m off the sphere within 2 s.)
 #[test]
 fn a_centred_drape_stays_centred_and_settles() {
-    let mut cfg = DrapeConfig::new(64, IntegratorKind::Rk4);
-    cfg.measure_penetration = false;
+    let cfg = DrapeConfig::new(64, IntegratorKind::Rk4);
     let mut scene = DrapeScene::new(cfg).unwrap();
     let mut last_kinetic = Real::INFINITY;
     let mut last_height = Real::NAN;
@@ -251,6 +253,9 @@ fn a_centred_drape_stays_centred_and_settles() {
         last_height = f.centroid.y;
     });
     assert!(r.max_drift < 5e-3, "the cloth drifted {} m", r.max_drift);
+    // Issue 2's accuracy targets (its time target is a benchmark's business).
+    assert!(r.max_stretch <= 1.03, "max stretch {}", r.max_stretch);
+    assert!(r.max_penetration <= 1e-3, "penetration {} m", r.max_penetration);
     assert!(
         last_kinetic < 5e-3,
         "still moving after 2 s: {last_kinetic} J"

@@ -140,10 +140,11 @@ fn apply_set(cfg: &mut DrapeConfig, key: &str, x: f64) -> Result<(), String> {
         "velocity_damping" => p.velocity_damping = x,
         "air_drag" => p.air_drag = x,
         "bending_rigidity" => p.bending_rigidity = x,
+        "auto_substep" => p.auto_substep = x != 0.0,
         "k_bend" => p.k_bend = x,
         _ => {
             return Err(format!(
-                "--set: unknown key `{key}` (max_strain, strain_iterations, strain_relaxation, tethers, max_substep, k_scale, bend_scale, compress_scale, long_range, stretch_guard, min_bend_ratio, thickness, penetration, friction, velocity_damping, air_drag, bending_rigidity, k_bend)"
+                "--set: unknown key `{key}` (max_strain, strain_iterations, strain_relaxation, tethers, max_substep, k_scale, bend_scale, compress_scale, long_range, stretch_guard, min_bend_ratio, thickness, penetration, friction, velocity_damping, air_drag, bending_rigidity, k_bend, auto_substep)"
             ));
         }
     }
