@@ -255,7 +255,11 @@ fn a_centred_drape_stays_centred_and_settles() {
     assert!(r.max_drift < 5e-3, "the cloth drifted {} m", r.max_drift);
     // Issue 2's accuracy targets (its time target is a benchmark's business).
     assert!(r.max_stretch <= 1.03, "max stretch {}", r.max_stretch);
-    assert!(r.max_penetration <= 1e-3, "penetration {} m", r.max_penetration);
+    assert!(
+        r.max_penetration <= 1e-3,
+        "penetration {} m",
+        r.max_penetration
+    );
     assert!(
         last_kinetic < 5e-3,
         "still moving after 2 s: {last_kinetic} J"
