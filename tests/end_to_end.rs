@@ -151,6 +151,11 @@ fn bad_scene_files_name_the_key_and_the_line() {
         e.contains("bad.toml:6") && e.contains("rk5") && e.contains("rk4"),
         "{e}"
     );
+    let e = err(&format!("{base}[cloth]\nmaterial = \"sheet\"\n"));
+    assert!(
+        e.contains("bad.toml:6") && e.contains("cloth.material") && e.contains("square"),
+        "{e}"
+    );
     let e = err("[body]\nkind = \"mannequin\"\n[garment]\n");
     assert!(e.contains("kind"), "{e}");
     let e = err(&format!("{base}[body]\n"));
@@ -312,4 +317,17 @@ impl WithRefine for Scene {
         self.effects.refine = level;
         self
     }
+}
+
+#[test]
+fn the_drape_scene_file_uses_the_drape_fixtures_material() {
+    let s = Scene::load(&repo().join("data/scenes/drape-sphere.toml")).unwrap();
+    let n = s.garment.particles.unwrap();
+    let p = Pipeline::new(s).unwrap();
+    let (got, want) = (&p.coarse.sim.params, tryon_pipeline::drape::drape_params(n));
+    assert_eq!(got.k_stretch, want.k_stretch);
+    assert_eq!(got.bending_rigidity, want.bending_rigidity);
+    assert_eq!(got.max_strain, Some(1.0));
+    assert!(got.long_range && !p.coarse.sim.model.long_range_springs.is_empty());
+    assert!(!p.coarse.sim.model.hinges.is_empty());
 }

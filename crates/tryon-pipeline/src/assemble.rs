@@ -3,7 +3,9 @@
 
 use crate::coarse::CoarseLoop;
 use crate::real;
-use crate::scene::{BodyKind, CollisionMethod, GarmentKind, IntegratorName, MotionKind, Scene};
+use crate::scene::{
+    BodyKind, CollisionMethod, GarmentKind, IntegratorName, MaterialName, MotionKind, Scene,
+};
 use body_collide::{
     BodyError, BodyFollower, BodyMesh, DepthMapCollider, ExactCollider, FollowParams, Mannequin,
     NearestVertexCollider, SdfCollider, SkinnedBody, SurfaceBinding,
@@ -398,7 +400,15 @@ impl Pipeline {
 
         // Cloth: material from the garment's resolution, then the scene's overrides and effects.
         let c = &scene.cloth;
-        let mut p = garment_params(mean_edge(&garment), c.density.unwrap_or(0.2));
+        let density = c.density.unwrap_or(0.2);
+        let mut p = match c.material.unwrap_or_default() {
+            MaterialName::Garment => garment_params(mean_edge(&garment), density),
+            // The grid's spacing (the mean triangle edge counts the quads' diagonals).
+            MaterialName::Sheet => {
+                let n = scene.garment.particles.unwrap_or(32).max(2) - 1;
+                crate::drape::sheet_params(scene.garment.size.unwrap_or(1.0) / n as Real, density)
+            }
+        };
         if g.kind == GarmentKind::Mhclo {
             // Garments modelled for rendering have slivers (0.5 mm edges beside 1.5 cm ones).
             p.mass_floor = 0.3;

@@ -207,11 +207,37 @@ pub enum IntegratorName {
     ImplicitEuler,
 }
 
+/// Which material the garment's resolution sets the defaults from.
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum MaterialName {
+    /// Garments (P1): asymmetric springs, flexion springs with the bending limit, Provot's limit at
+    /// 1.03 (over-relaxed).
+    #[default]
+    Garment,
+    /// A flat sheet (the drape fixture's material): Bergou et al.'s quadratic bending, which
+    /// assumes a flat rest shape, and the strain limit at rest length with long-range lines. Only
+    /// for `kind = "square"`.
+    Sheet,
+}
+
+impl MaterialName {
+    /// The name the scene file uses.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            MaterialName::Garment => "garment",
+            MaterialName::Sheet => "sheet",
+        }
+    }
+}
+
 /// Cloth material and solver settings; absent values take the garment's defaults.
 #[derive(Clone, Debug, Default, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct ClothSection {
     pub integrator: Option<IntegratorName>,
+    /// Material defaults ("garment" unless set).
+    pub material: Option<MaterialName>,
     /// Largest substep (s).
     pub substep: Option<Real>,
     /// kg/m^2.
@@ -722,13 +748,21 @@ impl Scene {
             range("cloth", k, v, 0.0, 1e9)?;
         }
         if let Some(x) = c.max_strain
-            && !(x == 0.0 || (x.is_finite() && x > 1.0 && x <= 2.0))
+            && !(x == 0.0 || (x.is_finite() && (1.0..=2.0).contains(&x)))
         {
             return Err(bad(
                 "cloth",
                 "max_strain",
                 x.to_string(),
-                "0 (off) or a ratio in (1, 2]",
+                "0 (off) or a ratio in [1, 2]",
+            ));
+        }
+        if c.material == Some(MaterialName::Sheet) && self.garment.kind != GarmentKind::Square {
+            return Err(bad(
+                "cloth",
+                "material",
+                "\"sheet\"".to_string(),
+                "\"garment\": the sheet material assumes a flat rest shape (garment kind = \"square\")",
             ));
         }
         if let Some(n) = c.strain_iterations
