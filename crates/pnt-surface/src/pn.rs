@@ -1,7 +1,7 @@
 //! One PN triangle: ten cubic Bezier control points and six quadratic normal coefficients
 //! (Vlachos et al. 2001, section 3).
 
-use tryon_core::math::{Real, Vec3};
+use tryon_core::math::{Real, Vec3, unit};
 
 /// The geometry and normal coefficients of one PN triangle with corners 1, 2, 3.
 ///
@@ -21,7 +21,7 @@ pub struct PnPatch {
 #[inline]
 fn edge_point(pi: &Vec3, pj: &Vec3, ni: &Vec3) -> Vec3 {
     let w = (pj - pi).dot(ni);
-    (pi * 2.0 + pj - ni * w) / 3.0
+    (pi * 2.0 + pj - ni * w) * (1.0 / 3.0)
 }
 
 /// Mid-edge normal: `Ni + Nj - v_ij (Pj - Pi)`, `v_ij = 2 (Pj - Pi).(Ni + Nj) / |Pj - Pi|^2`,
@@ -36,9 +36,7 @@ fn edge_normal(pi: &Vec3, pj: &Vec3, ni: &Vec3, nj: &Vec3) -> Vec3 {
     } else {
         s
     };
-    h.try_normalize(1e-30)
-        .or_else(|| s.try_normalize(1e-30))
-        .unwrap_or(*ni)
+    unit(&h, 1e-30).or_else(|| unit(&s, 1e-30)).unwrap_or(*ni)
 }
 
 impl PnPatch {
@@ -52,8 +50,8 @@ impl PnPatch {
         let b012 = edge_point(&p3, &p2, &n3);
         let b102 = edge_point(&p3, &p1, &n3);
         let b201 = edge_point(&p1, &p3, &n1);
-        let e = (b210 + b120 + b021 + b012 + b102 + b201) / 6.0;
-        let v = (p1 + p2 + p3) / 3.0;
+        let e = (b210 + b120 + b021 + b012 + b102 + b201) * (1.0 / 6.0);
+        let v = (p1 + p2 + p3) * (1.0 / 3.0);
         let b111 = e + (e - v) * 0.5;
         PnPatch {
             b: [p1, p2, p3, b210, b120, b201, b021, b102, b012, b111],
@@ -98,8 +96,8 @@ impl PnPatch {
             + n[3] * (w * u)
             + n[4] * (u * v)
             + n[5] * (w * v);
-        m.try_normalize(1e-30)
-            .or_else(|| (n[0] * w + n[1] * u + n[2] * v).try_normalize(1e-30))
+        unit(&m, 1e-30)
+            .or_else(|| unit(&(n[0] * w + n[1] * u + n[2] * v), 1e-30))
             .unwrap_or(n[0])
     }
 }

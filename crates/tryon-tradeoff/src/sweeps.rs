@@ -46,7 +46,8 @@ fn stage_ms(s: &Stats, names: &[&str]) -> Real {
         .iter()
         .filter_map(|n| s.stages.get(*n))
         .map(|t| t.ms_mean)
-        .sum()
+        // (A fold from +0, not `sum`: an empty sum of floats is -0, printed "-0.00".)
+        .fold(0.0, |a, b| a + b)
 }
 
 /// One collider setting's results on one scene.

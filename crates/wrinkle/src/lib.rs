@@ -29,7 +29,7 @@
 
 use thiserror::Error;
 use tryon_core::frames::{CoarseFrame, FineSurface, lattice_index, lattice_len};
-use tryon_core::math::{Real, Vec3, vertex_normals};
+use tryon_core::math::{Real, Vec3, unit, vertex_normals};
 use tryon_core::stages::{Collider, DetailModel, Probe};
 use tryon_core::topology::Csr;
 
@@ -87,6 +87,8 @@ pub enum DetailError {
         triangles: usize,
         segments: u32,
     },
+    #[error("fine surface: consecutive lattice vertices are not joined by a fine triangle edge")]
+    NotALattice,
     #[error("coarse triangle {face} refers to vertex {vertex}, but the rest shape has {count}")]
     Coarse {
         face: usize,
@@ -137,6 +139,20 @@ pub struct Detail {
     allowed: Vec<Real>,
     /// Interior fine vertices of each coarse triangle.
     interior: Csr,
+    /// The lines forces are interpolated along (eqs. 4-5), built once: first each coarse edge's
+    /// fine vertices (`edge_fine`'s rows), then inside each coarse triangle the lattice rows of
+    /// both directions. Per item, `line_step` is the fine edge to the next item (unused on a line's
+    /// last item) and `line_sign` is +1 when that step runs from the edge's second vertex to its
+    /// first (the direction of `x[i] - x[j]`), -1 otherwise.
+    lines: Csr,
+    line_step: Vec<u32>,
+    line_sign: Vec<Real>,
+    /// Per line: its interior vertices already have a force from the other lattice direction,
+    /// which this line's is averaged with.
+    line_average: Vec<bool>,
+    /// This frame's length and unit direction (`x[i] - x[j]`, zero when degenerate) of each fine edge.
+    edge_len: Vec<Real>,
+    edge_unit: Vec<Vec3>,
     /// Carried wrinkle height of each fine vertex (m).
     pub height: Vec<Real>,
     /// Penetration height of each fine vertex this frame (m).
@@ -145,12 +161,11 @@ pub struct Detail {
     reference: Vec<Vec3>,
     control: Vec<Vec3>,
     ef: Vec<Vec3>,
-    ef_count: Vec<u8>,
     vforce: Vec<Real>,
     required_edge: Vec<Real>,
     required_vertex: Vec<Real>,
-    line: Vec<u32>,
     weights: Vec<Real>,
+    new_height: Vec<Real>,
     touched: Vec<u32>,
     stamp: u32,
     which: Vec<u32>,
@@ -328,6 +343,63 @@ impl Detail {
             .collect();
         let ring = csr(m, &mut ring_pairs);
         let interior = csr(tris.len(), &mut interior_rows);
+        // The interpolation lines, each step named by its fine edge.
+        let edge_index: std::collections::HashMap<(u32, u32), u32> = fine_edges
+            .iter()
+            .enumerate()
+            .map(|(k, &[i, j])| ((i, j), k as u32))
+            .collect();
+        let mut line_offsets = vec![0u32];
+        let (mut line_items, mut line_step, mut line_sign) = (Vec::new(), Vec::new(), Vec::new());
+        let mut line_average = Vec::new();
+        let mut push_line = |verts: &[u32], average: bool| {
+            for (k, &v) in verts.iter().enumerate() {
+                line_items.push(v);
+                let (e, sign) = match verts.get(k + 1) {
+                    Some(&w) => (
+                        edge_index
+                            .get(&(v.min(w), v.max(w)))
+                            .copied()
+                            .unwrap_or(u32::MAX),
+                        if v > w { 1.0 } else { -1.0 },
+                    ),
+                    None => (u32::MAX, 0.0),
+                };
+                line_step.push(e);
+                line_sign.push(sign);
+            }
+            line_offsets.push(line_items.len() as u32);
+            line_average.push(average);
+        };
+        for e in 0..edges.len() {
+            push_line(edge_fine.row(e), false);
+        }
+        let mut verts = Vec::new();
+        for f in 0..tris.len() {
+            for dir in 0..2 {
+                for r in 1..n {
+                    verts.clear();
+                    for s in 0..=n - r {
+                        let (i, j) = if dir == 0 { (s, r) } else { (r, s) };
+                        verts.push(at(f, i, j));
+                    }
+                    if verts.len() >= 3 {
+                        push_line(&verts, dir == 1);
+                    }
+                }
+            }
+        }
+        if line_step
+            .iter()
+            .zip(&line_sign)
+            .any(|(&e, &s)| s != 0.0 && e == u32::MAX)
+        {
+            return Err(DetailError::NotALattice);
+        }
+        let lines = Csr {
+            offsets: line_offsets,
+            items: line_items,
+        };
         Ok(Detail {
             params,
             n,
@@ -343,18 +415,23 @@ impl Detail {
             allowed: Vec::with_capacity(fine_edges.len()),
             fine_edges,
             interior,
+            lines,
+            line_step,
+            line_sign,
+            line_average,
+            edge_len: Vec::new(),
+            edge_unit: Vec::new(),
             height: vec![0.0; m],
             raise: vec![0.0; m],
             stats: DetailStats::default(),
             reference: Vec::new(),
             control: Vec::new(),
             ef: vec![Vec3::zeros(); m],
-            ef_count: vec![0; m],
             vforce: vec![0.0; m],
             required_edge: Vec::new(),
             required_vertex: Vec::new(),
-            line: Vec::new(),
             weights: Vec::new(),
+            new_height: Vec::new(),
             touched: vec![0; m],
             stamp: 0,
             which: Vec::new(),
@@ -379,25 +456,56 @@ impl Detail {
         }
     }
 
-    /// Cumulative transmission weights (eq. 5) along the fine vertices in `self.line`.
-    fn line_weights(&mut self, x: &[Vec3]) {
-        let m = self.line.len();
+    /// This frame's fine edge lengths and directions, and the height difference each fine edge
+    /// allows (from its length on the reference surface).
+    fn edge_geometry(&mut self, x: &[Vec3]) {
+        let r = self.params.max_fine_stretch;
+        let slope = (r * r - 1.0).max(0.0).sqrt();
+        self.edge_len.clear();
+        self.edge_unit.clear();
+        self.allowed.clear();
+        for &[i, j] in &self.fine_edges {
+            let (i, j) = (i as usize, j as usize);
+            let d = x[i] - x[j];
+            let l = d.norm();
+            self.edge_len.push(l);
+            self.edge_unit.push(if l > 1e-30 {
+                d * (1.0 / l)
+            } else {
+                Vec3::zeros()
+            });
+            self.allowed
+                .push((self.reference[i] - self.reference[j]).norm() * slope);
+        }
+    }
+
+    /// Cumulative transmission weights (eq. 5) along line `line` into `self.weights`.
+    fn line_weights(&mut self, line: usize) {
+        let (a, b) = (
+            self.lines.offsets[line] as usize,
+            self.lines.offsets[line + 1] as usize,
+        );
+        let m = b - a;
         self.weights.clear();
         self.weights.resize(m, 0.0);
         if m < 2 {
             return;
         }
-        // c_k for interior points (clamped to [0, 1]: a fold bent past 90 degrees transmits nothing).
+        // c_k for interior points (clamped to [0, 1]: a fold bent past 90 degrees transmits
+        // nothing): the cosine between the steps into and out of the point.
         let mut total = 0.0;
         for k in 1..m - 1 {
-            let (a, b, c) = (
-                x[self.line[k - 1] as usize],
-                x[self.line[k] as usize],
-                x[self.line[k + 1] as usize],
+            let (e1, e2) = (
+                self.line_step[a + k - 1] as usize,
+                self.line_step[a + k] as usize,
             );
-            let (d1, d2) = (b - a, c - b);
-            let l = d1.norm() * d2.norm();
-            let cos = if l > 1e-30 { d1.dot(&d2) / l } else { 1.0 };
+            let cos = if self.edge_len[e1] * self.edge_len[e2] > 1e-30 {
+                self.line_sign[a + k - 1]
+                    * self.line_sign[a + k]
+                    * self.edge_unit[e1].dot(&self.edge_unit[e2])
+            } else {
+                1.0
+            };
             self.weights[k] = cos.clamp(0.0, 1.0);
             total += self.weights[k];
         }
@@ -417,58 +525,38 @@ impl Detail {
         self.weights[m - 1] = 1.0;
     }
 
-    /// Forces on fine vertices interpolated from the coarse elastic forces (eqs. 4-5).
-    fn interpolate_forces(&mut self, coarse: &CoarseFrame, x: &[Vec3]) {
-        let nf = x.len();
-        self.ef.iter_mut().for_each(|f| *f = Vec3::zeros());
-        self.ef_count.iter_mut().for_each(|c| *c = 0);
+    /// Forces on fine vertices interpolated from the coarse elastic forces (eqs. 4-5): along each
+    /// coarse edge from its ends, then inside each coarse triangle along both lattice directions
+    /// from the edges, averaged.
+    fn interpolate_forces(&mut self, coarse: &CoarseFrame, nf: usize) {
+        self.ef.clear();
+        self.ef.resize(nf, Vec3::zeros());
         for k in 0..self.coarse_vertices.min(nf) {
             self.ef[k] = coarse.elastic_force.get(k).copied().unwrap_or_default();
         }
-        for e in 0..self.edges.len() {
-            self.line.clear();
-            self.line.extend_from_slice(self.edge_fine.row(e));
-            self.line_weights(x);
-            let (f1, fn_) = (
-                self.ef[self.line[0] as usize],
-                self.ef[self.line[self.line.len() - 1] as usize],
+        for line in 0..self.line_average.len() {
+            let (a, b) = (
+                self.lines.offsets[line] as usize,
+                self.lines.offsets[line + 1] as usize,
             );
-            for k in 1..self.line.len() - 1 {
-                self.ef[self.line[k] as usize] = f1 + (fn_ - f1) * self.weights[k];
+            let m = b - a;
+            if m < 3 {
+                continue;
             }
-        }
-        let n = self.n;
-        let per = lattice_len(n);
-        for f in 0..self.coarse_tris.len() {
-            for dir in 0..2 {
-                for r in 1..n {
-                    self.line.clear();
-                    for s in 0..=n - r {
-                        let (i, j) = if dir == 0 { (s, r) } else { (r, s) };
-                        self.line
-                            .push(self.lattice[f * per + lattice_index(n, i, j)]);
-                    }
-                    if self.line.len() < 3 {
-                        continue;
-                    }
-                    self.line_weights(x);
-                    let m = self.line.len();
-                    let (f1, fn_) = (
-                        self.ef[self.line[0] as usize],
-                        self.ef[self.line[m - 1] as usize],
-                    );
-                    for k in 1..m - 1 {
-                        let v = self.line[k] as usize;
-                        let add = f1 + (fn_ - f1) * self.weights[k];
-                        // Interior vertices: the first direction writes, the second averages.
-                        if self.ef_count[v] == 0 {
-                            self.ef[v] = add;
-                        } else {
-                            self.ef[v] = (self.ef[v] + add) * 0.5;
-                        }
-                        self.ef_count[v] += 1;
-                    }
-                }
+            self.line_weights(line);
+            let (f1, fn_) = (
+                self.ef[self.lines.items[a] as usize],
+                self.ef[self.lines.items[b - 1] as usize],
+            );
+            let average = self.line_average[line];
+            for k in 1..m - 1 {
+                let v = self.lines.items[a + k] as usize;
+                let add = f1 + (fn_ - f1) * self.weights[k];
+                self.ef[v] = if average {
+                    (self.ef[v] + add) * 0.5
+                } else {
+                    add
+                };
             }
         }
     }
@@ -482,19 +570,15 @@ impl Detail {
         }
         let nf = fine.positions.len();
         let x = std::mem::take(&mut fine.positions);
-        self.interpolate_forces(coarse, &x);
-        // Vertical forces (eqs. 6-7), one length per edge.
+        self.edge_geometry(&x);
+        self.interpolate_forces(coarse, nf);
+        // Vertical forces (eqs. 6-7).
         self.vforce.clear();
         self.vforce.resize(nf, 0.0);
-        for &[i, j] in &self.fine_edges {
+        for (&[i, j], u) in self.fine_edges.iter().zip(&self.edge_unit) {
             let (i, j) = (i as usize, j as usize);
-            let d = x[i] - x[j];
-            let l = d.norm();
-            if l > 1e-30 {
-                let u = d / l;
-                self.vforce[i] += u.dot(&self.ef[j]);
-                self.vforce[j] -= u.dot(&self.ef[i]);
-            }
+            self.vforce[i] += u.dot(&self.ef[j]);
+            self.vforce[j] -= u.dot(&self.ef[i]);
         }
         for v in &mut self.vforce {
             if !v.is_finite() {
@@ -504,10 +588,14 @@ impl Detail {
         // Required length change per coarse edge (eq. 8, section 4.3.4's sign), per coarse vertex.
         self.required_edge.clear();
         for e in 0..self.edges.len() {
-            let row = self.edge_fine.row(e);
-            let len: Real = row
-                .windows(2)
-                .map(|w| (x[w[1] as usize] - x[w[0] as usize]).norm())
+            // The coarse edge's line: its steps are its fine path.
+            let (a, b) = (
+                self.lines.offsets[e] as usize,
+                self.lines.offsets[e + 1] as usize,
+            );
+            let len: Real = self.line_step[a..b - 1]
+                .iter()
+                .map(|&k| self.edge_len[k as usize])
                 .sum();
             self.required_edge.push(self.edge_rest[e] - len);
         }
@@ -523,7 +611,8 @@ impl Detail {
         }
         let k = self.params.k_out_plane;
         let dt = self.params.dt;
-        let mut new_height = self.height.clone();
+        let mut new_height = std::mem::take(&mut self.new_height);
+        new_height.clone_from(&self.height);
         for i in 0..nf {
             let src = &fine.sources[i];
             let req = if i < self.coarse_vertices {
@@ -576,12 +665,6 @@ impl Detail {
         }
         // Neighbours may not be pulled apart beyond max_fine_stretch (two Gauss-Seidel passes,
         // lowering the higher vertex).
-        let r = self.params.max_fine_stretch;
-        let slope = (r * r - 1.0).max(0.0).sqrt();
-        self.allowed.clear();
-        self.allowed.extend(self.fine_edges.iter().map(|&[i, j]| {
-            (self.reference[i as usize] - self.reference[j as usize]).norm() * slope
-        }));
         for _ in 0..2 {
             for (&[i, j], &allowed) in self.fine_edges.iter().zip(&self.allowed) {
                 let (i, j) = (i as usize, j as usize);
@@ -593,7 +676,7 @@ impl Detail {
                 }
             }
         }
-        self.height = new_height;
+        self.new_height = std::mem::replace(&mut self.height, new_height);
         let mut x = x;
         let mut hmax: Real = 0.0;
         for i in 0..nf {
@@ -740,9 +823,7 @@ impl Detail {
             if nd.dot(&pn) < 0.0 {
                 nd = -nd;
             }
-            fine.normals[i] = (nd * alpha + pn * (1.0 - alpha))
-                .try_normalize(1e-30)
-                .unwrap_or(pn);
+            fine.normals[i] = unit(&(nd * alpha + pn * (1.0 - alpha)), 1e-30).unwrap_or(pn);
         }
     }
 
