@@ -66,6 +66,35 @@ fn the_spot_scene_drapes_and_the_depth_maps_correct_the_fine_surface() {
     assert!(!off.stats.stages.contains_key("fine_collision"));
 }
 
+/// P1's tracker on an object standing on a table (two pieces of body): every cloth particle keeps a
+/// track on each piece. (When the only extra track was on the piece the first track was not
+/// started on, the cloth starting nearest spot had no track on the table and fell through it.)
+#[test]
+fn nearest_vertex_tracking_holds_the_cloth_on_spots_table() {
+    let out = run(
+        scene(
+            "cloth-on-spot.toml",
+            &[
+                "effects.body_collision=\"nearest_vertex\"",
+                "effects.refine=0",
+            ],
+        ),
+        36,
+    );
+    for (k, f) in out.frames.iter().enumerate() {
+        let lowest = f.garment.iter().map(|x| x.y).fold(f64::INFINITY, f64::min);
+        assert!(
+            lowest > -0.005,
+            "frame {k}: lowest particle at y = {lowest}"
+        );
+    }
+    assert!(
+        out.stats.metrics.p99_penetration_m < 1e-3,
+        "p99 penetration {}",
+        out.stats.metrics.p99_penetration_m
+    );
+}
+
 #[test]
 fn the_grab_drags_a_corner_along_its_path() {
     let out = run(scene("cloth-on-spot.toml", &[]), 120);

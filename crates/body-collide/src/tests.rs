@@ -359,32 +359,42 @@ fn sdf_and_depth_maps_resolve_a_sphere_to_millimetres() {
 /// the other is still found inside, though no hill-climb leads from one piece to the other.
 #[test]
 fn tracking_sees_every_piece_of_the_body() {
-    let a = icosphere(0.2, 3, Vec3::zeros());
-    let b = icosphere(0.2, 3, Vec3::new(1.0, 0.0, 0.0));
-    let base = a.positions.len() as u32;
-    let mut m = a.clone();
-    m.positions.extend_from_slice(&b.positions);
-    m.faces.extend(b.faces.iter().map(|f| match f {
-        tryon_core::mesh::Face::Tri(t) => tryon_core::mesh::Face::Tri(t.map(|v| v + base)),
-        tryon_core::mesh::Face::Quad(q) => tryon_core::mesh::Face::Quad(q.map(|v| v + base)),
-    }));
-    let mut tracker = NearestVertexCollider::new(&m, 0.0).unwrap();
-    let mut pts = vec![Vec3::new(0.25, 0.0, 0.0)];
-    tracker.resolve(&mut pts, &mut Vec::new());
-    // Now inside the second sphere.
-    pts[0] = Vec3::new(0.9, 0.0, 0.0);
-    let mut contacts = Vec::new();
-    tracker.resolve(&mut pts, &mut contacts);
-    assert_eq!(
-        contacts.len(),
-        1,
-        "the point inside the second piece was missed"
-    );
-    assert!(
-        (pts[0] - Vec3::new(1.0, 0.0, 0.0)).norm() > 0.19,
-        "{:?}",
-        pts[0]
-    );
+    // Pieces of different sizes, the point first tracked near the smaller one: the track it starts
+    // with is then not on the largest piece (spot on its table, before this was fixed, had no
+    // track on the table, and the cloth fell through it).
+    for (first, second) in [(3, 3), (2, 4), (4, 2)] {
+        let a = icosphere(0.2, first, Vec3::zeros());
+        let b = icosphere(0.2, second, Vec3::new(1.0, 0.0, 0.0));
+        let base = a.positions.len() as u32;
+        let mut m = a.clone();
+        m.positions.extend_from_slice(&b.positions);
+        m.faces.extend(b.faces.iter().map(|f| match f {
+            tryon_core::mesh::Face::Tri(t) => tryon_core::mesh::Face::Tri(t.map(|v| v + base)),
+            tryon_core::mesh::Face::Quad(q) => tryon_core::mesh::Face::Quad(q.map(|v| v + base)),
+        }));
+        for (start, inside, centre) in [
+            (Vec3::new(0.25, 0.0, 0.0), Vec3::new(0.9, 0.0, 0.0), 1.0),
+            (Vec3::new(0.75, 0.0, 0.0), Vec3::new(0.1, 0.0, 0.0), 0.0),
+        ] {
+            let mut tracker = NearestVertexCollider::new(&m, 0.0).unwrap();
+            let mut pts = vec![start];
+            tracker.resolve(&mut pts, &mut Vec::new());
+            // Now inside the other piece.
+            pts[0] = inside;
+            let mut contacts = Vec::new();
+            tracker.resolve(&mut pts, &mut contacts);
+            assert_eq!(
+                contacts.len(),
+                1,
+                "subdivisions {first}/{second}: the point inside the other piece was missed"
+            );
+            assert!(
+                (pts[0] - Vec3::new(centre, 0.0, 0.0)).norm() > 0.19,
+                "{:?}",
+                pts[0]
+            );
+        }
+    }
 }
 
 /// The referee takes non-finite points without panicking: it has nothing to say about them, and

@@ -63,11 +63,13 @@ pub struct NearestVertexCollider {
     /// Nearest body vertex of each probed point (`probe` keeps its own cache).
     pub probe_nearest: Vec<u32>,
     bounds: (Vec3, Vec3),
-    /// One vertex of each connected piece of the body beyond the first (an object on a table):
-    /// a hill-climb cannot cross from one piece to another, so each point also keeps a nearest
-    /// vertex on each of these pieces (`nearest_more`, pieces fastest).
+    /// One vertex of each connected piece of the body when it has more than one (an object on a
+    /// table): a hill-climb cannot cross from one piece to another, so each point also keeps a
+    /// nearest vertex on every piece (`nearest_more`, pieces fastest).
     extra_pieces: Vec<u32>,
     nearest_more: Vec<u32>,
+    /// Index in `extra_pieces` of each vertex's piece (`u32::MAX` for a vertex in no face).
+    piece_of: Vec<u32>,
     /// Per body vertex: 0 not yet known, 1 convex fan, 2 not (reset when the body moves).
     fan_convex: Vec<std::cell::Cell<u8>>,
 }
@@ -77,7 +79,10 @@ impl NearestVertexCollider {
     pub fn new(mesh: &PolyMesh, thickness: Real) -> Result<Self, BodyError> {
         let body = BodyMesh::new(mesh)?;
         let bounds = body.bounds();
-        let extra_pieces = pieces(&body).into_iter().skip(1).collect();
+        // A body in several pieces: a track on every piece, since the main track (from the
+        // brute-force nearest vertex) can start on any of them.
+        let (all, piece_of) = pieces(&body);
+        let extra_pieces = if all.len() > 1 { all } else { Vec::new() };
         Ok(NearestVertexCollider {
             thickness,
             nearest: Vec::new(),
@@ -87,6 +92,7 @@ impl NearestVertexCollider {
             bounds,
             extra_pieces,
             nearest_more: Vec::new(),
+            piece_of,
             fan_convex: vec![std::cell::Cell::new(0); body.positions.len()],
             body,
         })
@@ -112,16 +118,24 @@ impl NearestVertexCollider {
                 .iter()
                 .map(|p| self.body.nearest_vertex_brute(p))
                 .collect();
-            // The other pieces start from their seed vertex and climb.
-            self.nearest_more = points
-                .iter()
-                .flat_map(|p| {
-                    self.extra_pieces
-                        .iter()
-                        .map(|&s| self.body.climb(p, s))
-                        .collect::<Vec<_>>()
-                })
-                .collect();
+            // Every piece's track starts at the point's nearest vertex on that piece (a climb from
+            // some vertex of a non-convex piece can stop on its far side, where the point would
+            // look inside).
+            self.nearest_more.clear();
+            if k > 0 {
+                let mut best = vec![(0u32, Real::INFINITY); k];
+                for p in points {
+                    best.iter_mut().for_each(|b| *b = (0, Real::INFINITY));
+                    for (v, q) in self.body.positions.iter().enumerate() {
+                        let piece = self.piece_of[v] as usize;
+                        let d = (q - p).norm_squared();
+                        if piece < k && d < best[piece].1 {
+                            best[piece] = (v as u32, d);
+                        }
+                    }
+                    self.nearest_more.extend(best.iter().map(|b| b.0));
+                }
+            }
             return;
         }
         for (i, p) in points.iter().enumerate() {
@@ -451,29 +465,40 @@ impl Collider for NearestVertexCollider {
     }
 }
 
-/// One vertex of each connected piece of the body (by the vertex graph), largest piece first.
-fn pieces(body: &BodyMesh) -> Vec<u32> {
+/// One vertex of each connected piece of the body (by the vertex graph), largest piece first, and
+/// each vertex's piece in that order (`u32::MAX` for a vertex in no face).
+fn pieces(body: &BodyMesh) -> (Vec<u32>, Vec<u32>) {
     let n = body.positions.len();
-    let mut seen = vec![false; n];
+    let mut label = vec![u32::MAX; n];
     let mut found: Vec<(usize, u32)> = Vec::new();
     for start in 0..n {
-        if seen[start] || body.vertex_faces.row(start).is_empty() {
+        if label[start] != u32::MAX || body.vertex_faces.row(start).is_empty() {
             continue;
         }
-        seen[start] = true;
+        let id = found.len() as u32;
+        label[start] = id;
         let mut stack = vec![start as u32];
         let mut size = 0;
         while let Some(v) = stack.pop() {
             size += 1;
             for &w in body.ring.row(v as usize) {
-                if !seen[w as usize] {
-                    seen[w as usize] = true;
+                if label[w as usize] == u32::MAX {
+                    label[w as usize] = id;
                     stack.push(w);
                 }
             }
         }
         found.push((size, start as u32));
     }
-    found.sort_by_key(|p| std::cmp::Reverse(p.0));
-    found.into_iter().map(|(_, v)| v).collect()
+    let mut order: Vec<usize> = (0..found.len()).collect();
+    order.sort_by_key(|&i| std::cmp::Reverse(found[i].0));
+    let mut rank = vec![0u32; found.len()];
+    for (r, &i) in order.iter().enumerate() {
+        rank[i] = r as u32;
+    }
+    let piece_of = label
+        .into_iter()
+        .map(|l| if l == u32::MAX { l } else { rank[l as usize] })
+        .collect();
+    (order.into_iter().map(|i| found[i].1).collect(), piece_of)
 }
