@@ -16,7 +16,11 @@ fn drape_frame(c: &mut Criterion) {
         .warm_up_time(Duration::from_secs(1))
         .measurement_time(Duration::from_secs(4));
     for n in [32usize, 64, 128] {
-        for kind in [IntegratorKind::Rk4, IntegratorKind::SymplecticEuler] {
+        for kind in [
+            IntegratorKind::Rk4,
+            IntegratorKind::SymplecticEuler,
+            IntegratorKind::ImplicitEuler,
+        ] {
             let mut cfg = DrapeConfig::new(n, kind);
             cfg.measure_penetration = false;
             let Ok(mut scene) = DrapeScene::new(cfg) else {
