@@ -311,6 +311,11 @@ fn bad_parameters_and_layouts_are_named() {
     assert!(e.to_string().contains("refine"), "{e}");
     let e = Detail::new(&fine, &mesh.positions[..3], DetailParams::default()).unwrap_err();
     assert!(e.to_string().contains("vertex"), "{e}");
+    // A lattice whose neighbours no fine triangle joins (the triangles were lost).
+    let mut torn = linear_fine(&mesh, &mesh.positions, 2);
+    torn.triangles.clear();
+    let e = Detail::new(&torn, &mesh.positions, DetailParams::default()).unwrap_err();
+    assert!(e.to_string().contains("not joined"), "{e}");
 }
 
 proptest! {
