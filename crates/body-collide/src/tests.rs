@@ -459,4 +459,38 @@ proptest! {
             prop_assert!(d > -1e-6, "point {} still {} m inside", k, -d);
         }
     }
+
+    /// `resolve` skips a point that has moved less than its clearance since it was last found
+    /// outside. Moved again by up to 2 cm (some into the body, some by less than their clearance),
+    /// and then with the body moved into them, the points still end up outside by the referee.
+    #[test]
+    fn skipping_points_by_clearance_misses_nothing(amp in 0.05..0.25f64, waves in 2.0..5.0f64, s in seeds(), s2 in seeds(), shift in prop::array::uniform3(-0.02..0.02f64)) {
+        let mut m = bumpy_sphere(4, amp, waves);
+        let mut tracker = NearestVertexCollider::new(&m, 0.001).unwrap();
+        let mut pts: Vec<Vec3> = s
+            .iter()
+            .enumerate()
+            .map(|(i, r)| m.positions[(i * 7919) % m.positions.len()] + Vec3::new(r[0], r[1], r[2]) * 0.03)
+            .collect();
+        let mut contacts = Vec::new();
+        tracker.resolve(&mut pts, &mut contacts);
+        for (p, r) in pts.iter_mut().zip(s2.iter().cycle()) {
+            *p += Vec3::new(r[0], r[1], r[2]) * 0.02;
+        }
+        tracker.resolve(&mut pts, &mut contacts);
+        let referee = ExactCollider::new(&m, 0.0).unwrap();
+        for (k, p) in pts.iter().enumerate() {
+            let d = referee.signed_distance(p).unwrap();
+            prop_assert!(d > -1e-6, "moved: point {} {} m inside", k, -d);
+        }
+        let dx = Vec3::new(shift[0], shift[1], shift[2]);
+        m.positions.iter_mut().for_each(|p| *p += dx);
+        tracker.update(&BodyFrame { time: 0.0, positions: m.positions.clone(), velocities: Vec::new() });
+        tracker.resolve(&mut pts, &mut contacts);
+        let referee = ExactCollider::new(&m, 0.0).unwrap();
+        for (k, p) in pts.iter().enumerate() {
+            let d = referee.signed_distance(p).unwrap();
+            prop_assert!(d > -1e-6, "body moved: point {} {} m inside", k, -d);
+        }
+    }
 }

@@ -19,12 +19,16 @@ const FLAT: Real = 1e-4;
 /// How many times a point is tested and moved out in one `resolve` (folds can need more than one).
 const RESOLVE_ROUNDS: usize = 3;
 
+/// Largest clearance a point keeps between `resolve` calls (m).
+const MAX_CLEARANCE: Real = 0.01;
+
 /// What P1's test says at one vertex.
 enum FanTest {
     /// Behind every face: the face the point is nearest behind and its height over it.
     Inside(u32, Real),
-    /// In front of every face: outside whatever the fan's shape.
-    Front(Highest),
+    /// In front of every face: outside whatever the fan's shape. The second value is the height
+    /// over the lowest face plane, a lower bound of the distance to the fan.
+    Front(Highest, Real),
     /// Behind some faces, in front of others.
     Mixed(Highest),
 }
@@ -72,6 +76,14 @@ pub struct NearestVertexCollider {
     piece_of: Vec<u32>,
     /// Per body vertex: 0 not yet known, 1 convex fan, 2 not (reset when the body moves).
     fan_convex: Vec<std::cell::Cell<u8>>,
+    /// Per point: where it was last found outside, at which nearest vertex, and its clearance
+    /// there: how far it can move with P1's test at that vertex still saying outside (0 = test it
+    /// next time). The body does not move between `update`s, so a point whose nearest vertex is
+    /// the same and that has moved less than its clearance is still outside, and `resolve` skips
+    /// its test. Reset when the body moves; not used on a body in several pieces.
+    clear_at: Vec<Vec3>,
+    clear_vertex: Vec<u32>,
+    clearance: Vec<Real>,
 }
 
 impl NearestVertexCollider {
@@ -94,6 +106,9 @@ impl NearestVertexCollider {
             nearest_more: Vec::new(),
             piece_of,
             fan_convex: vec![std::cell::Cell::new(0); body.positions.len()],
+            clear_at: Vec::new(),
+            clear_vertex: Vec::new(),
+            clearance: Vec::new(),
             body,
         })
     }
@@ -170,12 +185,14 @@ impl NearestVertexCollider {
         let mut best = (u32::MAX, Real::NEG_INFINITY);
         let mut top = Highest(u32::MAX, Real::NEG_INFINITY);
         let mut front = 0usize;
+        let mut lowest = Real::INFINITY;
         let faces = self.body.vertex_faces.row(v as usize);
         for &f in faces {
             let h = rel.dot(&self.body.face_normals[f as usize]);
             if h > top.1 {
                 top = Highest(f, h);
             }
+            lowest = lowest.min(h);
             if h >= self.thickness {
                 front += 1;
             } else if h > best.1 {
@@ -185,7 +202,7 @@ impl NearestVertexCollider {
         if front == 0 && best.0 != u32::MAX {
             FanTest::Inside(best.0, best.1)
         } else if front == faces.len() {
-            FanTest::Front(top)
+            FanTest::Front(top, lowest)
         } else {
             FanTest::Mixed(top)
         }
@@ -216,8 +233,11 @@ impl NearestVertexCollider {
     /// vertex `v`, and where to move it. Over a convex fan P1's push along the nearest plane's
     /// normal is exact; in a fold it can land the point behind the fold's other side, so there the
     /// point goes to the closest point of the fan, `skin` out along the pseudo-normal.
+    ///
+    /// A point found outside gets `Err(clearance)`: a lower bound of its distance to the fan less
+    /// `skin` (0 when unknown).
     #[inline]
-    fn inside_any(&self, p: &Vec3, v: u32, skin: Real) -> Option<Hit> {
+    fn inside_any(&self, p: &Vec3, v: u32, skin: Real) -> Result<Hit, Real> {
         match self.fan_test(p, v) {
             FanTest::Inside(f, h) => {
                 let n = self.body.face_normals[f as usize];
@@ -230,14 +250,25 @@ impl NearestVertexCollider {
                     settled: convex,
                 };
                 if convex {
-                    Some(p1)
+                    Ok(p1)
                 } else {
-                    Some(self.inside_crease(p, v, skin).unwrap_or(p1))
+                    Ok(self.inside_crease(p, v, skin).ok().unwrap_or(p1))
                 }
             }
-            FanTest::Front(_) => None,
-            FanTest::Mixed(_) if self.fan_is_convex(v) => None,
-            FanTest::Mixed(_) => self.inside_crease(p, v, skin),
+            // Over a convex fan the height over the highest plane bounds the distance from below;
+            // over any fan, the height over the lowest (the point is in front of every face).
+            FanTest::Front(top, lowest) => Err(if self.fan_is_convex(v) {
+                top.1 - skin
+            } else {
+                lowest - skin
+            }),
+            FanTest::Mixed(top) if self.fan_is_convex(v) => Err(top.1 - skin),
+            // Moved less than `top.1 - skin`, the point stays in front of that plane (so never
+            // behind every face), and less than its distance to the fan less `skin`, it keeps
+            // clear of the fan.
+            FanTest::Mixed(top) => self
+                .inside_crease(p, v, skin)
+                .map_err(|c| c.min(top.1 - skin)),
         }
     }
 
@@ -246,13 +277,15 @@ impl NearestVertexCollider {
     /// others. Such a point is inside when it is behind the closest point of the fan, judged by the
     /// pseudo-normal there (the face normal, or the mean of the faces sharing the closest edge or
     /// vertex). Returns the face and the point's height over the closest point along that normal.
-    fn inside_crease(&self, p: &Vec3, v: u32, skin: Real) -> Option<Hit> {
+    ///
+    /// Outside, `Err` holds the point's distance to the fan less `skin` (0 when not known).
+    fn inside_crease(&self, p: &Vec3, v: u32, skin: Real) -> Result<Hit, Real> {
         if (p - self.body.positions[v as usize]).norm_squared() > CREASE_REACH * CREASE_REACH {
-            return None;
+            return Err(0.0);
         }
         let (f, q, bary) = self.body.closest_on_fan(p, v);
         if f == u32::MAX {
-            return None;
+            return Err(0.0);
         }
         let d2 = (p - q).norm_squared();
         let mut n = self.body.face_normals[f as usize];
@@ -265,16 +298,20 @@ impl NearestVertexCollider {
                     n += self.body.face_normals[g as usize];
                 }
             }
-            n = n.try_normalize(1e-12)?;
+            n = n.try_normalize(1e-12).ok_or(0.0)?;
         }
         let h = (p - q).dot(&n);
-        (h < skin).then_some(Hit {
-            face: f,
-            height: h,
-            normal: n,
-            target: q + n * skin,
-            settled: false,
-        })
+        if h < skin {
+            Ok(Hit {
+                face: f,
+                height: h,
+                normal: n,
+                target: q + n * skin,
+                settled: false,
+            })
+        } else {
+            Err(d2.sqrt() - skin)
+        }
     }
 
     /// Whether `p` projects along face `f`'s normal into the face (its edges included).
@@ -321,38 +358,64 @@ impl Collider for NearestVertexCollider {
         if !same_shape {
             self.bounds = self.body.bounds();
             self.fan_convex.iter().for_each(|c| c.set(0));
+            self.clearance.iter_mut().for_each(|c| *c = 0.0);
         }
     }
 
     fn resolve(&mut self, points: &mut [Vec3], contacts: &mut Vec<Contact>) {
-        self.track(points);
         let k = self.extra_pieces.len();
+        if self.nearest.len() != points.len() {
+            self.track(points);
+            self.clearance.clear();
+        }
+        self.clearance.resize(points.len(), 0.0);
+        self.clear_at.resize(points.len(), Vec3::zeros());
+        self.clear_vertex.resize(points.len(), u32::MAX);
         for (i, p) in points.iter_mut().enumerate() {
             if !self.near_bounds(p) {
                 continue;
             }
             let mut contact: Option<(u32, Real, Vec3)> = None;
+            let mut clear = MAX_CLEARANCE;
             for round in 0..RESOLVE_ROUNDS {
-                if round > 0 {
-                    // Moved onto one face's plane, the point may still be inside a neighbouring
-                    // fold: track again from where it is now and test again.
-                    self.nearest[i] = self.body.climb(p, self.nearest[i]);
-                    for j in i * k..(i + 1) * k {
-                        self.nearest_more[j] = self.body.climb(p, self.nearest_more[j]);
-                    }
+                // Track the nearest vertex from where the point is now (after round 0: moved onto
+                // one face's plane, the point may still be inside a neighbouring fold).
+                self.nearest[i] = self.body.climb(p, self.nearest[i]);
+                for j in i * k..(i + 1) * k {
+                    self.nearest_more[j] = self.body.climb(p, self.nearest_more[j]);
+                }
+                // Same vertex, and within its clearance of where it was last found outside: the
+                // test would say outside again.
+                let c = self.clearance[i];
+                if round == 0
+                    && k == 0
+                    && c > 0.0
+                    && self.nearest[i] == self.clear_vertex[i]
+                    && (*p - self.clear_at[i]).norm_squared() < c * c
+                {
+                    break;
                 }
                 // Inside any piece (the shallowest hit when in several).
                 let mut hit: Option<Hit> = None;
                 for v in self.candidates(i) {
-                    if let Some(h) = self.inside_any(p, v, self.thickness)
-                        && hit.is_none_or(|b| h.height > b.height)
-                    {
-                        hit = Some(h);
+                    match self.inside_any(p, v, self.thickness) {
+                        Ok(h) => {
+                            if hit.is_none_or(|b| h.height > b.height) {
+                                hit = Some(h);
+                            }
+                        }
+                        Err(c) => clear = clear.min(c),
                     }
                 }
                 let Some(h) = hit else {
+                    if round == 0 {
+                        self.clearance[i] = clear.max(0.0);
+                        self.clear_at[i] = *p;
+                        self.clear_vertex[i] = self.nearest[i];
+                    }
                     break;
                 };
+                self.clearance[i] = 0.0;
                 *p = h.target;
                 // The contact keeps the first (deepest) test's depth and the last face and normal.
                 let depth = contact.map_or((-h.height).max(0.0), |c| c.1);
@@ -409,10 +472,10 @@ impl Collider for NearestVertexCollider {
                     });
                     continue;
                 }
-                FanTest::Front(top) => top,
+                FanTest::Front(top, _) => top,
                 FanTest::Mixed(top) => {
                     if !self.fan_is_convex(v)
-                        && let Some(h) = self.inside_crease(p, v, 0.0)
+                        && let Ok(h) = self.inside_crease(p, v, 0.0)
                     {
                         out.push(Probe {
                             distance: h.height,
@@ -460,7 +523,7 @@ impl Collider for NearestVertexCollider {
             .row(v as usize)
             .iter()
             .all(|&f| (p - x).dot(&self.body.face_normals[f as usize]) < 0.0)
-            || self.inside_crease(p, v, 0.0).is_some();
+            || self.inside_crease(p, v, 0.0).is_ok();
         Some(if behind_all { -d } else { d })
     }
 }
