@@ -26,7 +26,8 @@ pub struct BodyMesh {
     /// Triangles around each vertex.
     pub vertex_faces: Csr,
     pub positions: Vec<Vec3>,
-    /// Unit outward normal of each triangle.
+    /// Unit outward normal of each triangle (empty after [`BodyMesh::set_shape`]: see
+    /// [`BodyMesh::face_normal`]).
     pub face_normals: Vec<Vec3>,
     /// Vertex velocities (empty when the body is at rest).
     pub velocities: Vec<Vec3>,
@@ -53,6 +54,14 @@ impl BodyMesh {
 
     /// Takes a new body shape. Frames with the wrong vertex count are ignored and reported.
     pub fn set_frame(&mut self, frame: &BodyFrame) -> Result<(), BodyError> {
+        self.set_shape(frame)?;
+        self.compute_normals();
+        Ok(())
+    }
+
+    /// Takes a new body shape without computing the face normals (`face_normals` is left empty),
+    /// for users that need only a few of them ([`BodyMesh::face_normal`]).
+    pub fn set_shape(&mut self, frame: &BodyFrame) -> Result<(), BodyError> {
         if frame.positions.len() != self.positions.len() {
             return Err(BodyError::VertexCount {
                 got: frame.positions.len(),
@@ -64,19 +73,34 @@ impl BodyMesh {
         if frame.velocities.len() == frame.positions.len() {
             self.velocities.extend_from_slice(&frame.velocities);
         }
-        self.compute_normals();
+        self.face_normals.clear();
         Ok(())
     }
 
     fn compute_normals(&mut self) {
-        let p = &self.positions;
-        self.face_normals.clear();
-        self.face_normals.extend(self.triangles.iter().map(|t| {
-            let [a, b, c] = t.map(|v| p[v as usize]);
-            let n = (b - a).cross(&(c - a));
-            let len = n.norm();
-            if len > 0.0 { n / len } else { Vec3::zeros() }
-        }));
+        let mut normals = std::mem::take(&mut self.face_normals);
+        normals.clear();
+        normals.extend((0..self.triangles.len()).map(|f| self.normal_now(f)));
+        self.face_normals = normals;
+    }
+
+    /// Unit normal of triangle `f` computed from the current positions (zero when degenerate).
+    #[inline]
+    fn normal_now(&self, f: usize) -> Vec3 {
+        let [a, b, c] = self.corners(f);
+        let n = (b - a).cross(&(c - a));
+        let len = n.norm();
+        if len > 0.0 { n / len } else { Vec3::zeros() }
+    }
+
+    /// Unit outward normal of triangle `f`: from `face_normals`, or computed now when they were
+    /// not ([`BodyMesh::set_shape`]).
+    #[inline]
+    pub fn face_normal(&self, f: usize) -> Vec3 {
+        match self.face_normals.get(f) {
+            Some(n) => *n,
+            None => self.normal_now(f),
+        }
     }
 
     /// Corner positions of triangle `f`.

@@ -44,7 +44,7 @@ pub struct BodyFollower {
 
 fn frame_of(body: &BodyMesh, f: usize) -> (Vec3, Vec3, Vec3, Vec3) {
     let [v0, v1, v2] = body.corners(f);
-    (v0, v1 - v0, v2 - v0, body.face_normals[f])
+    (v0, v1 - v0, v2 - v0, body.face_normal(f))
 }
 
 /// Closest point on the faces around `v`, and when that lands on the fan's rim, on the faces around
@@ -170,7 +170,8 @@ impl BodyFollower {
     /// Takes the body's new shape and moves every recorded point to its face coordinates there.
     /// Returns how many points moved.
     pub fn apply(&mut self, frame: &BodyFrame, points: &mut [Vec3]) -> Result<usize, BodyError> {
-        self.body.set_frame(frame)?;
+        // Only the faces points are attached to need their normals.
+        self.body.set_shape(frame)?;
         let mut moved = 0;
         for (p, a) in points.iter_mut().zip(&self.attached) {
             let Some(a) = a else { continue };
