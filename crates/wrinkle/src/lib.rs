@@ -135,8 +135,6 @@ pub struct Detail {
     ring: Csr,
     /// Each fine edge once (i < j), for the passes that visit edges rather than vertices.
     fine_edges: Vec<[u32; 2]>,
-    /// Largest height difference allowed across each fine edge this frame (m).
-    allowed: Vec<Real>,
     /// Interior fine vertices of each coarse triangle.
     interior: Csr,
     /// The lines forces are interpolated along (eqs. 4-5), built once: first each coarse edge's
@@ -412,7 +410,6 @@ impl Detail {
             tri_edges,
             vertex_edges,
             ring,
-            allowed: Vec::with_capacity(fine_edges.len()),
             fine_edges,
             interior,
             lines,
@@ -459,11 +456,8 @@ impl Detail {
     /// This frame's fine edge lengths and directions, and the height difference each fine edge
     /// allows (from its length on the reference surface).
     fn edge_geometry(&mut self, x: &[Vec3]) {
-        let r = self.params.max_fine_stretch;
-        let slope = (r * r - 1.0).max(0.0).sqrt();
         self.edge_len.clear();
         self.edge_unit.clear();
-        self.allowed.clear();
         for &[i, j] in &self.fine_edges {
             let (i, j) = (i as usize, j as usize);
             let d = x[i] - x[j];
@@ -474,8 +468,6 @@ impl Detail {
             } else {
                 Vec3::zeros()
             });
-            self.allowed
-                .push((self.reference[i] - self.reference[j]).norm() * slope);
         }
     }
 
@@ -664,15 +656,26 @@ impl Detail {
             }
         }
         // Neighbours may not be pulled apart beyond max_fine_stretch (two Gauss-Seidel passes,
-        // lowering the higher vertex).
+        // lowering the higher vertex). The height difference an edge allows is `slope` times its
+        // length on the reference surface, compared squared; its square root is taken only
+        // where the edge is shortened (most edges have equal heights, zero, at both ends).
+        let r = self.params.max_fine_stretch;
+        let slope2 = (r * r - 1.0).max(0.0);
         for _ in 0..2 {
-            for (&[i, j], &allowed) in self.fine_edges.iter().zip(&self.allowed) {
+            for &[i, j] in &self.fine_edges {
                 let (i, j) = (i as usize, j as usize);
                 let d = new_height[i] - new_height[j];
-                if d > allowed {
-                    new_height[i] = new_height[j] + allowed;
-                } else if -d > allowed {
-                    new_height[j] = new_height[i] + allowed;
+                if d == 0.0 {
+                    continue;
+                }
+                let allowed2 = (self.reference[i] - self.reference[j]).norm_squared() * slope2;
+                if d * d > allowed2 {
+                    let allowed = allowed2.sqrt();
+                    if d > 0.0 {
+                        new_height[i] = new_height[j] + allowed;
+                    } else {
+                        new_height[j] = new_height[i] + allowed;
+                    }
                 }
             }
         }
