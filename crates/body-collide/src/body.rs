@@ -106,7 +106,9 @@ impl BodyMesh {
     /// Corner positions of triangle `f`.
     #[inline]
     pub fn corners(&self, f: usize) -> [Vec3; 3] {
-        self.triangles[f].map(|v| self.positions[v as usize])
+        let [a, b, c] = self.triangles[f];
+        let p = &self.positions;
+        [p[a as usize], p[b as usize], p[c as usize]]
     }
 
     /// Velocity of the surface at barycentric `bary` on triangle `f` (zero for a body at rest).

@@ -118,7 +118,7 @@ impl DepthMapCollider {
         let (w, h) = (self.size[ua], self.size[va]);
         let inv = 1.0 / self.pixel;
         for f in 0..self.body.triangles.len() {
-            let p = self.body.triangles[f].map(|i| self.body.positions[i as usize]);
+            let p = self.body.corners(f);
             // Pixel coordinates (continuous; pixel (i, j) has its centre at i + 0.5, j + 0.5).
             let uv = p.map(|q| {
                 (

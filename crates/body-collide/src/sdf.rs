@@ -101,7 +101,7 @@ impl SdfCollider {
         self.vertex_normals.clear();
         self.vertex_normals.resize(b.positions.len(), Vec3::zeros());
         for (f, t) in b.triangles.iter().enumerate() {
-            let p = t.map(|v| b.positions[v as usize]);
+            let p = b.corners(f);
             for k in 0..3 {
                 let e1 = p[(k + 1) % 3] - p[k];
                 let e2 = p[(k + 2) % 3] - p[k];
