@@ -133,6 +133,9 @@ pub struct Detail {
     vertex_edges: Csr,
     /// Neighbours of each fine vertex in the fine mesh.
     ring: Csr,
+    /// Fine triangles around each fine vertex, and how many fine triangles there were.
+    vertex_tris: Csr,
+    tri_count: usize,
     /// Each fine edge once (i < j), for the passes that visit edges rather than vertices.
     fine_edges: Vec<[u32; 2]>,
     /// Interior fine vertices of each coarse triangle.
@@ -340,6 +343,13 @@ impl Detail {
             .map(|&(i, j)| [i, j])
             .collect();
         let ring = csr(m, &mut ring_pairs);
+        let mut vt: Vec<(u32, u32)> = fine
+            .triangles
+            .iter()
+            .enumerate()
+            .flat_map(|(f, t)| t.map(|v| (v, f as u32)))
+            .collect();
+        let vertex_tris = csr(m, &mut vt);
         let interior = csr(tris.len(), &mut interior_rows);
         // The interpolation lines, each step named by its fine edge.
         let edge_index: std::collections::HashMap<(u32, u32), u32> = fine_edges
@@ -410,6 +420,8 @@ impl Detail {
             tri_edges,
             vertex_edges,
             ring,
+            vertex_tris,
+            tri_count: fine.triangles.len(),
             fine_edges,
             interior,
             lines,
@@ -813,14 +825,36 @@ impl Detail {
     }
 
     /// P1.4.4: blends the deformed surface's normals with the PN normals by height (eqs. 13-14).
+    ///
+    /// Where the height is zero the PN normal is kept as it is, so the deformed surface's normal
+    /// (area-weighted over the vertex's triangles) is computed only where a vertex is raised.
     pub fn blend_normals(&mut self, fine: &mut FineSurface) {
-        vertex_normals(&fine.positions, &fine.triangles, &mut self.deformed_normals);
+        let gather = self.tri_count == fine.triangles.len()
+            && self.vertex_tris.offsets.len() == fine.positions.len() + 1;
+        if !gather {
+            vertex_normals(&fine.positions, &fine.triangles, &mut self.deformed_normals);
+        }
         let h = self.params.h_normal;
-        for i in 0..fine.positions.len() {
+        let x = &fine.positions;
+        for i in 0..x.len() {
             let dh = self.height[i] + self.raise[i];
             let alpha = (dh / h).clamp(0.0, 1.0);
             let pn = self.control.get(i).copied().unwrap_or(fine.normals[i]);
-            let mut nd = self.deformed_normals[i];
+            if !(alpha > 0.0) {
+                fine.normals[i] = pn;
+                continue;
+            }
+            let mut nd = if gather {
+                let mut sum = Vec3::zeros();
+                for &t in self.vertex_tris.row(i) {
+                    let [a, b, c] = fine.triangles[t as usize];
+                    let (a, b, c) = (a as usize, b as usize, c as usize);
+                    sum += (x[b] - x[a]).cross(&(x[c] - x[a]));
+                }
+                unit(&sum, 1e-30).unwrap_or(Vec3::y())
+            } else {
+                self.deformed_normals[i]
+            };
             // The deformed surface is built from the same triangles, so its normal faces the
             // PN normal's side; flip one that does not (a fold turned over).
             if nd.dot(&pn) < 0.0 {

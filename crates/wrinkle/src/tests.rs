@@ -347,3 +347,43 @@ proptest! {
         }
     }
 }
+
+/// Normal blending gathers the deformed normal only at raised vertices; it must give what blending
+/// over normals of the whole deformed surface (`vertex_normals`) gives.
+#[test]
+fn gathered_normals_match_the_whole_surface_normals() {
+    let mesh = grid_xz(8, 4, 1.0, 0.5, 0.0);
+    let x: Vec<Vec3> = mesh
+        .positions
+        .iter()
+        .map(|p| {
+            Vec3::new(
+                p.x * (0.8 - 0.15 * (std::f64::consts::PI * p.x).cos().abs()),
+                p.y,
+                p.z,
+            )
+        })
+        .collect();
+    let forces = spring_forces(&mesh, &x, 50.0);
+    let mut d = Detail::new(
+        &linear_fine(&mesh, &x, 2),
+        &mesh.positions,
+        DetailParams::default(),
+    )
+    .unwrap();
+    let mut fine = FineSurface::default();
+    for _ in 0..30 {
+        fine = linear_fine(&mesh, &x, 2);
+        d.wrinkle(&frame(&x, forces.clone()), &mut fine);
+    }
+    let raised = d.height.iter().filter(|h| **h > 0.0).count();
+    assert!(raised > 0 && raised < d.height.len(), "{raised} raised");
+    let mut whole = d.clone();
+    whole.tri_count = usize::MAX; // forces the whole-surface path
+    let (mut a, mut b) = (fine.clone(), fine);
+    d.blend_normals(&mut a);
+    whole.blend_normals(&mut b);
+    for (i, (p, q)) in a.normals.iter().zip(&b.normals).enumerate() {
+        assert!((p - q).norm() < 1e-12, "vertex {i}: {p:?} against {q:?}");
+    }
+}
