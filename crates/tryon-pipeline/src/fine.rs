@@ -88,6 +88,11 @@ impl FineStage {
         if p.blend_normals && (wrinkles || collide) {
             timers.time("normals", || self.detail.blend_normals(&mut self.surface));
         }
+    }
+
+    /// Adds this frame's length restoration error (a metric, not a surface stage: the pipeline
+    /// times it with the referee).
+    pub fn record_length_error(&mut self) {
         let (e, n) = self.detail.length_error(&self.surface.positions);
         if n > 0 {
             self.length_error_sum += e;

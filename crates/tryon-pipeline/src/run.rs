@@ -462,11 +462,14 @@ impl Pipeline {
             };
             let t = k as Real * dt;
             let body_frame = &body_frame;
+            total.accumulate(&report);
+            if let Some(f) = &mut self.fine {
+                timers.time("referee", || f.record_length_error());
+            }
             let output = match &self.fine {
                 Some(f) => &f.surface.positions,
                 None => &coarse_x,
             };
-            total.accumulate(&report);
             let referee = &mut self.referee;
             let (pen, (smax, smean)) = timers.time("referee", || {
                 if skinned {
