@@ -45,6 +45,19 @@ struct Hit {
     settled: bool,
 }
 
+/// What the crease test found: inside, outside (with the fan's closest point, and a lower bound
+/// of the distance to the fan less the skin, 0 when not known), or nothing (too far from the
+/// vertex to judge, or no face).
+enum Crease {
+    Inside(Hit),
+    Outside {
+        face: u32,
+        closest: Vec3,
+        clear: Real,
+    },
+    Unknown,
+}
+
 /// The face whose plane a point is highest above, and that height. Over a convex fan no point of
 /// the fan is nearer than this.
 #[derive(Clone, Copy)]
@@ -280,13 +293,27 @@ impl NearestVertexCollider {
     ///
     /// Outside, `Err` holds the point's distance to the fan less `skin` (0 when not known).
     fn inside_crease(&self, p: &Vec3, v: u32, skin: Real) -> Result<Hit, Real> {
+        match self.crease(p, v, skin) {
+            Crease::Inside(h) => Ok(h),
+            Crease::Outside { clear, .. } => Err(clear),
+            Crease::Unknown => Err(0.0),
+        }
+    }
+
+    /// [`Self::inside_crease`], keeping the closest point of the fan when it was found.
+    fn crease(&self, p: &Vec3, v: u32, skin: Real) -> Crease {
         if (p - self.body.positions[v as usize]).norm_squared() > CREASE_REACH * CREASE_REACH {
-            return Err(0.0);
+            return Crease::Unknown;
         }
         let (f, q, bary) = self.body.closest_on_fan(p, v);
         if f == u32::MAX {
-            return Err(0.0);
+            return Crease::Unknown;
         }
+        let outside = |clear| Crease::Outside {
+            face: f,
+            closest: q,
+            clear,
+        };
         let d2 = (p - q).norm_squared();
         let mut n = self.body.face_normals[f as usize];
         if bary.iter().any(|&b| b < 1e-9) {
@@ -298,11 +325,14 @@ impl NearestVertexCollider {
                     n += self.body.face_normals[g as usize];
                 }
             }
-            n = n.try_normalize(1e-12).ok_or(0.0)?;
+            n = match n.try_normalize(1e-12) {
+                Some(n) => n,
+                None => return outside(0.0),
+            };
         }
         let h = (p - q).dot(&n);
         if h < skin {
-            Ok(Hit {
+            Crease::Inside(Hit {
                 face: f,
                 height: h,
                 normal: n,
@@ -310,7 +340,7 @@ impl NearestVertexCollider {
                 settled: false,
             })
         } else {
-            Err(d2.sqrt() - skin)
+            outside(d2.sqrt() - skin)
         }
     }
 
@@ -464,6 +494,7 @@ impl Collider for NearestVertexCollider {
             }
             let v = self.body.climb(p, self.probe_nearest[k as usize]);
             self.probe_nearest[k as usize] = v;
+            let mut closest_found: Option<(u32, Vec3)> = None;
             let top = match self.fan_test(p, v) {
                 FanTest::Inside(f, h) => {
                     out.push(Probe {
@@ -474,14 +505,21 @@ impl Collider for NearestVertexCollider {
                 }
                 FanTest::Front(top, _) => top,
                 FanTest::Mixed(top) => {
-                    if !self.fan_is_convex(v)
-                        && let Ok(h) = self.inside_crease(p, v, 0.0)
-                    {
-                        out.push(Probe {
-                            distance: h.height,
-                            normal: h.normal,
-                        });
-                        continue;
+                    if !self.fan_is_convex(v) {
+                        match self.crease(p, v, 0.0) {
+                            Crease::Inside(h) => {
+                                out.push(Probe {
+                                    distance: h.height,
+                                    normal: h.normal,
+                                });
+                                continue;
+                            }
+                            // Outside: the crease test found the fan's closest point already.
+                            Crease::Outside { face, closest, .. } => {
+                                closest_found = Some((face, closest));
+                            }
+                            Crease::Unknown => {}
+                        }
                     }
                     top
                 }
@@ -498,7 +536,10 @@ impl Collider for NearestVertexCollider {
                 });
                 continue;
             }
-            let (f, q, _) = self.body.closest_on_fan(p, v);
+            let (f, q) = closest_found.unwrap_or_else(|| {
+                let (f, q, _) = self.body.closest_on_fan(p, v);
+                (f, q)
+            });
             let d = p - q;
             let n = d.norm();
             out.push(Probe {
