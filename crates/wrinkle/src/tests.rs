@@ -149,10 +149,8 @@ fn no_force_and_no_compression_give_no_height() {
     }
 }
 
-/// A sheet squeezed along x, most in the middle, held by its spring forces: with wrinkles on,
-/// the fine paths along compressed coarse edges come closer to their rest lengths.
-#[test]
-fn compression_wrinkles_and_restores_length() {
+/// A 8 x 4 sheet squeezed along x, most in the middle, with its spring forces there.
+fn squeezed_sheet() -> (PolyMesh, Vec<Vec3>, Vec<Vec3>) {
     let mesh = grid_xz(8, 4, 1.0, 0.5, 0.0);
     let x: Vec<Vec3> = mesh
         .positions
@@ -166,6 +164,14 @@ fn compression_wrinkles_and_restores_length() {
         })
         .collect();
     let forces = spring_forces(&mesh, &x, 50.0);
+    (mesh, x, forces)
+}
+
+/// A sheet squeezed along x, most in the middle, held by its spring forces: with wrinkles on,
+/// the fine paths along compressed coarse edges come closer to their rest lengths.
+#[test]
+fn compression_wrinkles_and_restores_length() {
+    let (mesh, x, forces) = squeezed_sheet();
     let run = |wrinkles: bool| {
         let p = DetailParams {
             wrinkles,
@@ -352,19 +358,7 @@ proptest! {
 /// over normals of the whole deformed surface (`vertex_normals`) gives.
 #[test]
 fn gathered_normals_match_the_whole_surface_normals() {
-    let mesh = grid_xz(8, 4, 1.0, 0.5, 0.0);
-    let x: Vec<Vec3> = mesh
-        .positions
-        .iter()
-        .map(|p| {
-            Vec3::new(
-                p.x * (0.8 - 0.15 * (std::f64::consts::PI * p.x).cos().abs()),
-                p.y,
-                p.z,
-            )
-        })
-        .collect();
-    let forces = spring_forces(&mesh, &x, 50.0);
+    let (mesh, x, forces) = squeezed_sheet();
     let mut d = Detail::new(
         &linear_fine(&mesh, &x, 2),
         &mesh.positions,
