@@ -170,6 +170,11 @@ fn bad_scene_files_name_the_key_and_the_line() {
         e.contains("bad.toml:6") && e.contains("effects.refine") && e.contains("0..=4"),
         "{e}"
     );
+    let e = err(&format!("{base}[cloth]\nstretch_guard = 0.9\n"));
+    assert!(
+        e.contains("bad.toml:6") && e.contains("cloth.stretch_guard") && e.contains("(1, 10]"),
+        "{e}"
+    );
     let e = err(&format!("{base}[effects]\nh_normal = 0.0\n"));
     assert!(e.contains("effects.h_normal"), "{e}");
     let e = err("[body]\nkind = \"mannequin\"\n[garment]\nkind = \"dress\"\nband_gap = -1\n");
@@ -306,6 +311,18 @@ fn the_demo_surface_stays_out_of_the_body_and_wrinkles_restore_length() {
     let run = p.run(Some(2), |_, _| {});
     assert_eq!(run.stats.counts.fine_vertices, None);
     assert_eq!(run.frames[1].garment.len(), p.garment.positions.len());
+}
+
+#[test]
+fn the_stretch_guard_key_reaches_the_solver_and_zero_turns_it_off() {
+    let base = "[body]\nkind = \"mannequin\"\n[garment]\nkind = \"dress\"\n[cloth]\n";
+    let guard = |extra: &str| {
+        let s = Scene::parse(&format!("{base}{extra}"), Path::new("g.toml")).unwrap();
+        Pipeline::new(s).unwrap().coarse.sim.params.stretch_guard
+    };
+    assert_eq!(guard(""), Some(1.1), "the garment default");
+    assert_eq!(guard("stretch_guard = 1.25\n"), Some(1.25));
+    assert_eq!(guard("stretch_guard = 0\n"), None);
 }
 
 trait WithRefine {

@@ -432,6 +432,9 @@ impl Pipeline {
         if let Some(n) = c.strain_iterations {
             p.strain_iterations = n;
         }
+        if let Some(r) = c.stretch_guard {
+            p.stretch_guard = (r > 0.0).then_some(r);
+        }
         p.gravity = if fx.gravity {
             tryon_core::math::GRAVITY
         } else {

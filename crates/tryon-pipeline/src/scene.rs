@@ -251,6 +251,9 @@ pub struct ClothSection {
     /// Provot's strain limit (1.0 < x); 0 turns it off.
     pub max_strain: Option<Real>,
     pub strain_iterations: Option<u32>,
+    /// Quality guard: a substep that stretches a structural edge past this ratio of its rest length
+    /// is retried at half the step; 0 turns it off.
+    pub stretch_guard: Option<Real>,
     /// Distance the cloth keeps from the body (m).
     pub thickness: Option<Real>,
 }
@@ -755,6 +758,16 @@ impl Scene {
                 "max_strain",
                 x.to_string(),
                 "0 (off) or a ratio in [1, 2]",
+            ));
+        }
+        if let Some(x) = c.stretch_guard
+            && !(x == 0.0 || (x.is_finite() && x > 1.0 && x <= 10.0))
+        {
+            return Err(bad(
+                "cloth",
+                "stretch_guard",
+                x.to_string(),
+                "0 (off) or a ratio in (1, 10]",
             ));
         }
         if c.material == Some(MaterialName::Sheet) && self.garment.kind != GarmentKind::Square {
