@@ -15,6 +15,16 @@ use tryon_pipeline::{Pipeline, Scene, Stats};
 /// The stages that make up the surface (P1 section 4).
 const SURFACE_STAGES: &[&str] = &["refine", "wrinkle", "fine_collision", "normals"];
 
+/// Appends one line to the sweep log and echoes it to stderr as progress.
+macro_rules! logln {
+    ($log:expr, $($arg:tt)*) => {{
+        let line = format!($($arg)*);
+        eprintln!("{line}");
+        $log.push_str(&line);
+        $log.push('\n');
+    }};
+}
+
 fn scenes_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/scenes")
 }
@@ -130,14 +140,13 @@ fn collider_sweep(quick: bool, log: &mut String) -> Result<Vec<ColliderPoint>, S
                 share: m.share_over_1mm,
                 stretch: m.max_stretch,
             };
-            let _ = writeln!(
+            logln!(
                 log,
                 "colliders: {name} {label}: {f} frames, {:.2} ms/frame, max {:.2} mm ({:.0} s)",
                 p.ms,
                 p.max_mm,
                 t0.elapsed().as_secs_f64()
             );
-            eprintln!("{}", log.lines().last().unwrap_or_default());
             out.push(p);
         }
     }
@@ -285,12 +294,15 @@ fn integrator_sweep(
                 },
                 stable,
             };
-            let _ = writeln!(
+            logln!(
                 log,
                 "integrators: {} h {:.3} ms: error {:.3} mm, {:.2} ms/frame, stable {}",
-                p.integrator, p.h_ms, p.error_mm, p.ms, p.stable
+                p.integrator,
+                p.h_ms,
+                p.error_mm,
+                p.ms,
+                p.stable
             );
-            eprintln!("{}", log.lines().last().unwrap_or_default());
             points.push(p);
         }
     }
@@ -317,12 +329,11 @@ fn integrator_sweep(
                     break;
                 }
             }
-            let _ = writeln!(
+            logln!(
                 log,
                 "stability: {} k x{k}: largest stable step {largest:?} ms",
                 kind.as_str()
             );
-            eprintln!("{}", log.lines().last().unwrap_or_default());
             stable.push(StablePoint {
                 integrator: kind.as_str(),
                 k_scale: k,
@@ -402,12 +413,14 @@ fn refine_sweep(quick: bool, log: &mut String) -> Result<Vec<RefinePoint>, Strin
             max_dev_mm: max * 1e3,
             mean_dev_mm: mean * 1e3,
         };
-        let _ = writeln!(
+        logln!(
             log,
             "refine: level {level}: {} fine vertices, {:.2} ms, deviation from level {top_level} max {:.3} mean {:.3} mm",
-            point.fine_vertices, point.ms, point.max_dev_mm, point.mean_dev_mm
+            point.fine_vertices,
+            point.ms,
+            point.max_dev_mm,
+            point.mean_dev_mm
         );
-        eprintln!("{}", log.lines().last().unwrap_or_default());
         out.push(point);
     }
     Ok(out)
@@ -431,12 +444,12 @@ fn wrinkle_sweep(quick: bool, log: &mut String) -> Result<Vec<WrinklePoint>, Str
             ms: stage_ms(&s, SURFACE_STAGES),
             length_error: s.metrics.length_error.unwrap_or(Real::NAN),
         };
-        let _ = writeln!(
+        logln!(
             log,
             "wrinkles {on}: surface {:.2} ms, length error {:.4}",
-            p.ms, p.length_error
+            p.ms,
+            p.length_error
         );
-        eprintln!("{}", log.lines().last().unwrap_or_default());
         out.push(p);
     }
     Ok(out)
@@ -474,12 +487,16 @@ fn guard_sweep(quick: bool, log: &mut String) -> Result<Vec<GuardPoint>, String>
             over,
             max_mm: m.max_penetration_m * 1e3,
         };
-        let _ = writeln!(
+        logln!(
             log,
             "guard {label}: cloth {:.2} ms/frame, {} retries, stretch max {:.3} mean {:.4}, frames over 1.1 {:.2}, penetration max {:.2} mm",
-            p.cloth_ms, p.retries, p.max_stretch, p.mean_stretch, p.over, p.max_mm
+            p.cloth_ms,
+            p.retries,
+            p.max_stretch,
+            p.mean_stretch,
+            p.over,
+            p.max_mm
         );
-        eprintln!("{}", log.lines().last().unwrap_or_default());
         out.push(p);
     }
     Ok(out)
@@ -526,12 +543,14 @@ fn spot_sweep(quick: bool, log: &mut String) -> Result<Vec<SpotPoint>, String> {
             p99_mm: m.p99_penetration_m * 1e3,
             share: m.share_over_1mm,
         };
-        let _ = writeln!(
+        logln!(
             log,
             "spot: {label}: {:.2} ms/frame of stages, {:.2} ms/frame wall, fine penetration max {:.2} p99 {:.2} mm",
-            p.ms, p.wall_ms, p.max_mm, p.p99_mm
+            p.ms,
+            p.wall_ms,
+            p.max_mm,
+            p.p99_mm
         );
-        eprintln!("{}", log.lines().last().unwrap_or_default());
         out.push(p);
     }
     Ok(out)
