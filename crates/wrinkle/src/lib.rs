@@ -131,8 +131,6 @@ pub struct Detail {
     tri_edges: Vec<[u32; 3]>,
     /// Coarse edges around each coarse vertex.
     vertex_edges: Csr,
-    /// Neighbours of each fine vertex in the fine mesh.
-    ring: Csr,
     /// Fine triangles around each fine vertex, and how many fine triangles there were.
     vertex_tris: Csr,
     tri_count: usize,
@@ -163,6 +161,7 @@ pub struct Detail {
     control: Vec<Vec3>,
     ef: Vec<Vec3>,
     vforce: Vec<Real>,
+    expected: Vec<Real>,
     required_edge: Vec<Real>,
     required_vertex: Vec<Real>,
     weights: Vec<Real>,
@@ -342,7 +341,6 @@ impl Detail {
             .filter(|(i, j)| i < j)
             .map(|&(i, j)| [i, j])
             .collect();
-        let ring = csr(m, &mut ring_pairs);
         let mut vt: Vec<(u32, u32)> = fine
             .triangles
             .iter()
@@ -419,7 +417,6 @@ impl Detail {
             edge_fine,
             tri_edges,
             vertex_edges,
-            ring,
             vertex_tris,
             tri_count: fine.triangles.len(),
             fine_edges,
@@ -437,6 +434,7 @@ impl Detail {
             control: Vec::new(),
             ef: vec![Vec3::zeros(); m],
             vforce: vec![0.0; m],
+            expected: vec![0.0; m],
             required_edge: Vec::new(),
             required_vertex: Vec::new(),
             weights: Vec::new(),
@@ -615,6 +613,22 @@ impl Detail {
         }
         let k = self.params.k_out_plane;
         let dt = self.params.dt;
+        // Expected length change (eqs. 9-10), summed per fine edge into both ends: the sign test
+        // `(v_i - v_j)(dh_i - dh_j) >= 0` is the same product seen from either end.
+        self.expected.clear();
+        self.expected.resize(nf, 0.0);
+        for &[i, j] in &self.fine_edges {
+            let (i, j) = (i as usize, j as usize);
+            let dv = self.vforce[i] - self.vforce[j];
+            let term = k * dv.abs();
+            let term = if dv * (self.height[i] - self.height[j]) >= 0.0 {
+                term
+            } else {
+                -term
+            };
+            self.expected[i] += term;
+            self.expected[j] += term;
+        }
         let mut new_height = std::mem::take(&mut self.new_height);
         new_height.clone_from(&self.height);
         for i in 0..nf {
@@ -629,18 +643,7 @@ impl Detail {
                 0.0
             };
             let vi = self.vforce[i];
-            // Expected length change (eqs. 9-10).
-            let mut expected = 0.0;
-            for &j in self.ring.row(i) {
-                let j = j as usize;
-                let dv = vi - self.vforce[j];
-                let s = if dv * (self.height[i] - self.height[j]) >= 0.0 {
-                    1.0
-                } else {
-                    -1.0
-                };
-                expected += s * k * dv.abs();
-            }
+            let expected = self.expected[i];
             let ratio = if expected.abs() > 1e-30 {
                 req / expected
             } else {
