@@ -455,7 +455,10 @@ impl Detail {
     /// Takes the refined surface as this frame's reference: `S` and `n` are kept, and the
     /// positions become `S + dh n` with the carried wrinkle height.
     fn take_reference(&mut self, fine: &mut FineSurface) {
-        self.reference.clone_from(&fine.positions);
+        // The refiner rewrites every position each frame, so the buffers are swapped rather
+        // than copied: `fine.positions` gets last frame's reference, overwritten below.
+        std::mem::swap(&mut self.reference, &mut fine.positions);
+        fine.positions.resize(self.reference.len(), Vec3::zeros());
         self.control.clone_from(&fine.normals);
         self.raise.iter_mut().for_each(|r| *r = 0.0);
         for i in 0..fine.positions.len() {
@@ -564,7 +567,8 @@ impl Detail {
     }
 
     /// P1.4.3: updates the carried wrinkle height and writes `S + dh n` into `fine.positions`
-    /// (taking the refiner's positions and normals as the reference surface).
+    /// (taking the refiner's positions and normals as the reference surface: call it once per
+    /// frame, after the refiner has written the surface).
     pub fn wrinkle(&mut self, coarse: &CoarseFrame, fine: &mut FineSurface) {
         self.take_reference(fine);
         if !self.params.wrinkles {
