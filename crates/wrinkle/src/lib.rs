@@ -466,104 +466,88 @@ impl Detail {
         }
     }
 
-    /// This frame's fine edge lengths and directions, and the height difference each fine edge
-    /// allows (from its length on the reference surface).
+    /// This frame's fine edge lengths and unit directions (`x[i] - x[j]`, zero when degenerate).
     fn edge_geometry(&mut self, x: &[Vec3]) {
-        self.edge_len.clear();
-        self.edge_unit.clear();
-        for &[i, j] in &self.fine_edges {
-            let (i, j) = (i as usize, j as usize);
-            let d = x[i] - x[j];
+        let ne = self.fine_edges.len();
+        self.edge_len.resize(ne, 0.0);
+        self.edge_unit.resize(ne, Vec3::zeros());
+        for ((&[i, j], len), unit) in self
+            .fine_edges
+            .iter()
+            .zip(&mut self.edge_len)
+            .zip(&mut self.edge_unit)
+        {
+            let d = x[i as usize] - x[j as usize];
             let l = d.norm();
-            self.edge_len.push(l);
-            self.edge_unit.push(if l > 1e-30 {
+            *len = l;
+            *unit = if l > 1e-30 {
                 d * (1.0 / l)
             } else {
                 Vec3::zeros()
-            });
-        }
-    }
-
-    /// Cumulative transmission weights (eq. 5) along line `line` into `self.weights`.
-    fn line_weights(&mut self, line: usize) {
-        let (a, b) = (
-            self.lines.offsets[line] as usize,
-            self.lines.offsets[line + 1] as usize,
-        );
-        let m = b - a;
-        self.weights.clear();
-        self.weights.resize(m, 0.0);
-        if m < 2 {
-            return;
-        }
-        // c_k for interior points (clamped to [0, 1]: a fold bent past 90 degrees transmits
-        // nothing): the cosine between the steps into and out of the point.
-        let mut total = 0.0;
-        for k in 1..m - 1 {
-            let (e1, e2) = (
-                self.line_step[a + k - 1] as usize,
-                self.line_step[a + k] as usize,
-            );
-            let cos = if self.edge_len[e1] * self.edge_len[e2] > 1e-30 {
-                self.line_sign[a + k - 1]
-                    * self.line_sign[a + k]
-                    * self.edge_unit[e1].dot(&self.edge_unit[e2])
-            } else {
-                1.0
             };
-            self.weights[k] = cos.clamp(0.0, 1.0);
-            total += self.weights[k];
         }
-        if total < 1e-12 {
-            for k in 0..m {
-                self.weights[k] = k as Real / (m - 1) as Real;
-            }
-            return;
-        }
-        let mut run = 0.0;
-        for k in 1..m - 1 {
-            let c = self.weights[k];
-            self.weights[k] = (run + 0.5 * c) / total;
-            run += c;
-        }
-        self.weights[0] = 0.0;
-        self.weights[m - 1] = 1.0;
     }
 
     /// Forces on fine vertices interpolated from the coarse elastic forces (eqs. 4-5): along each
     /// coarse edge from its ends, then inside each coarse triangle along both lattice directions
     /// from the edges, averaged.
     fn interpolate_forces(&mut self, coarse: &CoarseFrame, nf: usize) {
-        self.ef.clear();
-        self.ef.resize(nf, Vec3::zeros());
+        let mut ef = std::mem::take(&mut self.ef);
+        ef.clear();
+        ef.resize(nf, Vec3::zeros());
         for k in 0..self.coarse_vertices.min(nf) {
-            self.ef[k] = coarse.elastic_force.get(k).copied().unwrap_or_default();
+            ef[k] = coarse.elastic_force.get(k).copied().unwrap_or_default();
         }
-        for line in 0..self.line_average.len() {
-            let (a, b) = (
-                self.lines.offsets[line] as usize,
-                self.lines.offsets[line + 1] as usize,
-            );
+        let mut weights = std::mem::take(&mut self.weights);
+        let offsets = &self.lines.offsets;
+        for (line, &average) in self.line_average.iter().enumerate() {
+            let (a, b) = (offsets[line] as usize, offsets[line + 1] as usize);
             let m = b - a;
             if m < 3 {
                 continue;
             }
-            self.line_weights(line);
-            let (f1, fn_) = (
-                self.ef[self.lines.items[a] as usize],
-                self.ef[self.lines.items[b - 1] as usize],
-            );
-            let average = self.line_average[line];
+            let items = &self.lines.items[a..b];
+            let (steps, signs) = (&self.line_step[a..b], &self.line_sign[a..b]);
+            if weights.len() < m {
+                weights.resize(m, 0.0);
+            }
+            let w = &mut weights[..m];
+            // Transmission c_k at interior points (eq. 4), clamped to [0, 1] (a fold bent past
+            // 90 degrees transmits nothing): the cosine between the steps into and out of the
+            // point.
+            let mut total = 0.0;
             for k in 1..m - 1 {
-                let v = self.lines.items[a + k] as usize;
-                let add = f1 + (fn_ - f1) * self.weights[k];
-                self.ef[v] = if average {
-                    (self.ef[v] + add) * 0.5
+                let (e1, e2) = (steps[k - 1] as usize, steps[k] as usize);
+                let cos = if self.edge_len[e1] * self.edge_len[e2] > 1e-30 {
+                    signs[k - 1] * signs[k] * self.edge_unit[e1].dot(&self.edge_unit[e2])
                 } else {
-                    add
+                    1.0
                 };
+                w[k] = cos.clamp(0.0, 1.0);
+                total += w[k];
+            }
+            // Cumulative weights (eq. 5).
+            if total < 1e-12 {
+                for (k, wk) in w.iter_mut().enumerate() {
+                    *wk = k as Real / (m - 1) as Real;
+                }
+            } else {
+                let mut run = 0.0;
+                for wk in &mut w[1..m - 1] {
+                    let c = *wk;
+                    *wk = (run + 0.5 * c) / total;
+                    run += c;
+                }
+            }
+            let (f1, fn_) = (ef[items[0] as usize], ef[items[m - 1] as usize]);
+            for (&v, &wk) in items[1..m - 1].iter().zip(&w[1..m - 1]) {
+                let v = v as usize;
+                let add = f1 + (fn_ - f1) * wk;
+                ef[v] = if average { (ef[v] + add) * 0.5 } else { add };
             }
         }
+        self.ef = ef;
+        self.weights = weights;
     }
 
     /// P1.4.3: updates the carried wrinkle height and writes `S + dh n` into `fine.positions`
