@@ -5,7 +5,8 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::time::{Duration, Instant};
-use tryon_pipeline::run::{LoopState, Timers};
+use tryon_pipeline::LoopState;
+use tryon_pipeline::run::Timers;
 use tryon_pipeline::{Pipeline, Scene};
 
 fn fresh() -> (Pipeline, LoopState, usize) {
@@ -18,7 +19,7 @@ fn fresh() -> (Pipeline, LoopState, usize) {
     // Untimed: settle and start walking.
     let first = 30;
     for k in 1..first {
-        p.advance(&mut st, k as f64 / p.fps, &mut timers);
+        p.advance(&mut st, p.frame_time(k), &mut timers);
     }
     (p, st, first)
 }
@@ -39,7 +40,7 @@ fn demo_frame(c: &mut Criterion) {
                     (p, st, k) = fresh();
                 }
                 let t0 = Instant::now();
-                std::hint::black_box(p.advance(&mut st, k as f64 / p.fps, &mut timers));
+                std::hint::black_box(p.advance(&mut st, p.frame_time(k), &mut timers));
                 total += t0.elapsed();
                 k += 1;
             }

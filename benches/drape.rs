@@ -29,12 +29,12 @@ fn drape_frame(c: &mut Criterion) {
             for _ in 0..60 {
                 scene.step();
             }
-            let settled = scene.frame.clone();
+            let settled = scene.pipeline.cloth.clone();
             group.bench_with_input(BenchmarkId::new(kind.as_str(), n), &n, |b, _| {
                 b.iter_custom(|iters| {
                     let mut total = Duration::ZERO;
                     for _ in 0..iters {
-                        scene.frame.clone_from(&settled);
+                        scene.pipeline.cloth.clone_from(&settled);
                         let t = Instant::now();
                         std::hint::black_box(scene.step());
                         total += t.elapsed();

@@ -9,6 +9,8 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use std::path::Path;
 use std::time::Duration;
 use tryon_core::frames::BodyFrame;
+use tryon_core::stages::SurfaceInput;
+use tryon_pipeline::pipeline::run_surface;
 use tryon_pipeline::run::Timers;
 use tryon_pipeline::{Pipeline, Scene};
 
@@ -26,7 +28,7 @@ fn scene(wrinkles: bool) -> Pipeline {
     let mut st = p.start();
     let mut timers = Timers::default();
     for k in 1..=40 {
-        p.advance(&mut st, k as f64 / p.fps, &mut timers);
+        p.advance(&mut st, p.frame_time(k), &mut timers);
     }
     p
 }
@@ -44,12 +46,15 @@ fn surface(c: &mut Criterion) {
             positions: p.body_mesh.positions.clone(),
             velocities: Vec::new(),
         };
-        let fine = p.fine.as_mut().expect("the scene refines");
-        assert_eq!(fine.refiner.fine_vertices(), 11_025);
-        let coarse = p.coarse.frame.clone();
+        assert_eq!(p.surface.positions.len(), 11_025);
+        let coarse = p.cloth.clone();
+        let input = SurfaceInput {
+            coarse: &coarse,
+            body: Some(&body),
+        };
         let mut timers = Timers::default();
         group.bench_function(name, |b| {
-            b.iter(|| fine.run(&coarse, Some(&body), &mut timers));
+            b.iter(|| run_surface(&mut p.surface_stages, &input, &mut p.surface, &mut timers));
         });
     }
     group.finish();

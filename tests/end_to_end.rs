@@ -227,13 +227,13 @@ fn an_effect_that_cannot_act_changes_nothing_and_stages_are_only_the_enabled_one
         }
     }
     // A fixed body: no motion, skinning, following or collider updates.
-    assert_eq!(with.stages, vec!["cloth", "referee"]);
+    assert_eq!(with.stages(), vec!["cloth", "referee"]);
     let keys: Vec<&String> = a.stats.stages.keys().collect();
     assert_eq!(keys, vec!["cloth", "referee"]);
     // The walking mannequin without following and without collision.
     let text = "[body]\nkind = \"mannequin\"\n[garment]\nkind = \"skirt\"\n[motion]\nkind = \"walk\"\n[effects]\nfollow_body = false\nbody_collision = \"none\"\n";
     let p = Pipeline::new(Scene::parse(text, Path::new("t.toml")).unwrap()).unwrap();
-    assert_eq!(p.stages, vec!["motion", "skinning", "cloth", "referee"]);
+    assert_eq!(p.stages(), vec!["motion", "skinning", "cloth", "referee"]);
 }
 
 #[test]
@@ -272,10 +272,10 @@ fn the_demo_surface_stays_out_of_the_body_and_wrinkles_restore_length() {
         let mut p = Pipeline::new(with(extra)).unwrap();
         for s in ["refine", "wrinkle", "fine_collision", "normals"] {
             assert_eq!(
-                p.stages.contains(&s),
+                p.stages().contains(&s),
                 stages.contains(&s),
                 "{extra}: {:?}",
-                p.stages
+                p.stages()
             );
         }
         let run = p.run(Some(frames), |_, _| {});
@@ -304,7 +304,7 @@ fn the_demo_surface_stays_out_of_the_body_and_wrinkles_restore_length() {
     // refine = 0: no surface stage at all, the coarse mesh is the output.
     let mut p = Pipeline::new(with("wrinkles = true\n").clone_with_refine(0)).unwrap();
     assert!(
-        !p.stages
+        !p.stages()
             .iter()
             .any(|s| ["refine", "wrinkle", "fine_collision", "normals"].contains(s))
     );
@@ -318,7 +318,10 @@ fn the_stretch_guard_key_reaches_the_solver_and_zero_turns_it_off() {
     let base = "[body]\nkind = \"mannequin\"\n[garment]\nkind = \"dress\"\n[cloth]\n";
     let guard = |extra: &str| {
         let s = Scene::parse(&format!("{base}{extra}"), Path::new("g.toml")).unwrap();
-        Pipeline::new(s).unwrap().coarse.sim.params.stretch_guard
+        // The solver the pipeline assembles for this scene and garment.
+        let p = Pipeline::new(s).unwrap();
+        let sim = tryon_pipeline::build::cloth_sim(&p.scene, &p.garment, vec![], &[]).unwrap();
+        sim.params.stretch_guard
     };
     assert_eq!(guard(""), Some(1.1), "the garment default");
     assert_eq!(guard("stretch_guard = 1.25\n"), Some(1.25));
@@ -341,10 +344,15 @@ fn the_drape_scene_file_uses_the_drape_fixtures_material() {
     let s = Scene::load(&repo().join("data/scenes/drape-sphere.toml")).unwrap();
     let n = s.garment.particles.unwrap();
     let p = Pipeline::new(s).unwrap();
-    let (got, want) = (&p.coarse.sim.params, tryon_pipeline::drape::drape_params(n));
+    let sim = tryon_pipeline::build::cloth_sim(&p.scene, &p.garment, vec![], &[]).unwrap();
+    let (got, want) = (&sim.params, cloth_dyn::presets::drape(n));
     assert_eq!(got.k_stretch, want.k_stretch);
     assert_eq!(got.bending_rigidity, want.bending_rigidity);
     assert_eq!(got.max_strain, Some(1.0));
-    assert!(got.long_range && !p.coarse.sim.model.long_range_springs.is_empty());
-    assert!(!p.coarse.sim.model.hinges.is_empty());
+    assert!(got.long_range && !sim.model.long_range_springs.is_empty());
+    assert!(!sim.model.hinges.is_empty());
+    // The pipeline's own solver is that one: same substep and force elements.
+    let info = p.solver.info();
+    assert_eq!(info.nominal_substep, sim.nominal_substep());
+    assert_eq!(info.springs, sim.model.springs.len());
 }

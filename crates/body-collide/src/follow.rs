@@ -40,6 +40,8 @@ pub struct BodyFollower {
     pub params: FollowParams,
     nearest: Vec<u32>,
     attached: Vec<Option<Attachment>>,
+    /// The root joint the whole cloth rides with (see `carry.rs`).
+    pub carry: crate::carry::RootCarry,
 }
 
 fn frame_of(body: &BodyMesh, f: usize) -> (Vec3, Vec3, Vec3, Vec3) {
@@ -123,7 +125,14 @@ impl BodyFollower {
             params,
             nearest: Vec::new(),
             attached: Vec::new(),
+            carry: crate::carry::RootCarry::default(),
         }
+    }
+
+    /// The same follower carrying the cloth with joint `root`, whose rest position is `root_rest`.
+    pub fn with_root(mut self, root: usize, root_rest: Vec3) -> Self {
+        self.carry = crate::carry::RootCarry::new(root, root_rest);
+        self
     }
 
     /// Records each point's face coordinates on the current body (call after a step).

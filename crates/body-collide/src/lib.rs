@@ -12,9 +12,12 @@
 //!   [`SkinnedBody`] (linear blend skinning); [`girth_at`] measures it by slicing.
 //! - [`MakeHumanBody`]: a MakeHuman base mesh skinned by its own weights, morphed toward measurements.
 //! - [`BodyFollower`]: P1.3.4, points keep their coordinates relative to their nearest body face when
-//!   the body moves.
+//!   the body moves; as the frame loop's `Follower` it first carries the whole cloth with the root.
+//! - [`Bands`]: garment vertices bound to the body's surface (waistbands, collars, cuffs).
 
+pub mod bands;
 pub mod body;
+pub mod carry;
 pub mod depth;
 pub mod exact;
 pub mod follow;
@@ -25,7 +28,9 @@ pub mod sdf;
 pub mod skin;
 pub mod tracker;
 
+pub use bands::Bands;
 pub use body::{BodyError, BodyMesh};
+pub use carry::{RootCarry, RootDelta, root_transform};
 pub use depth::DepthMapCollider;
 pub use exact::{ExactCollider, penetration_depths};
 pub use follow::{BodyFollower, FollowParams, SurfaceBinding};

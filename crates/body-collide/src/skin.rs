@@ -4,7 +4,7 @@
 use tryon_core::frames::BodyFrame;
 use tryon_core::math::{Mat3, Real, Vec3};
 use tryon_core::pose::{Pose, Skeleton};
-use tryon_core::stages::BodyModel;
+use tryon_core::stages::{BodyModel, Rig};
 
 /// Skinning weights: per vertex four (joint, weight) pairs; unused slots have weight 0; weights sum to 1.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -165,5 +165,17 @@ impl BodyModel for SkinnedBody {
             }
             None => self.last = Some((pose.time, out.positions.clone())),
         }
+    }
+    fn shape_at(&self, pose: &Pose, out: &mut Vec<Vec3>) {
+        self.skin_into(pose, out);
+    }
+    fn rig(&self) -> Option<Rig<'_>> {
+        Some(Rig {
+            rest_positions: &self.rest_positions,
+            skeleton: &self.skeleton,
+            joint_rest: &self.joint_rest,
+            joints: &self.skin.joints,
+            weights: &self.skin.weights,
+        })
     }
 }

@@ -14,6 +14,7 @@ pub mod integrator;
 pub mod lines;
 pub mod model;
 pub mod params;
+pub mod presets;
 pub mod solver;
 pub mod strain;
 

@@ -5,6 +5,7 @@ use crate::params::{ClothParams, ParamError};
 use std::collections::HashSet;
 use std::ops::Range;
 use thiserror::Error;
+pub use tryon_core::interact::Handle;
 use tryon_core::math::{Real, Vec3};
 use tryon_core::mesh::{Face, PolyMesh};
 use tryon_core::topology::{Csr, NO_FACE, Topology, TopologyError};
@@ -80,44 +81,6 @@ impl SpringSet {
                 damping: self.damping[k],
             })
             .collect()
-    }
-}
-
-/// A particle that follows a scripted path (piecewise linear in time), as when P4's user drags the cloth.
-/// A path with a single key is a pin.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Handle {
-    pub particle: u32,
-    /// (time s, position m), times ascending.
-    pub path: Vec<(Real, Vec3)>,
-}
-
-impl Handle {
-    /// Position on the path at time t (held constant before the first and after the last key).
-    pub fn position(&self, t: Real) -> Vec3 {
-        let p = &self.path;
-        if t <= p[0].0 {
-            return p[0].1;
-        }
-        for w in p.windows(2) {
-            let ((t0, a), (t1, b)) = (w[0], w[1]);
-            if t <= t1 {
-                let s = if t1 > t0 { (t - t0) / (t1 - t0) } else { 1.0 };
-                return a + (b - a) * s;
-            }
-        }
-        p[p.len() - 1].1
-    }
-
-    /// Velocity on the path at time t (the slope of the segment holding t).
-    pub fn velocity(&self, t: Real) -> Vec3 {
-        for w in self.path.windows(2) {
-            let ((t0, a), (t1, b)) = (w[0], w[1]);
-            if t >= t0 && t < t1 {
-                return (b - a) / (t1 - t0);
-            }
-        }
-        Vec3::zeros()
     }
 }
 

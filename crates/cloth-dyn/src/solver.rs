@@ -9,7 +9,7 @@ use crate::params::ClothParams;
 use crate::strain::{ContactPlane, Tethers, limit_strain};
 use tryon_core::frames::{CoarseFrame, Contact, StepReport};
 use tryon_core::math::{Real, Vec3, is_finite};
-use tryon_core::stages::{ClothSolver, Collider};
+use tryon_core::stages::{ClothInfo, ClothSolver, Collider};
 
 /// How many times the stretch guard may halve a substep. The guard retries only substeps that
 /// caused the over-stretch themselves.
@@ -341,6 +341,37 @@ pub fn contact_velocity(v: Vec3, normal: Vec3, body_velocity: Vec3, mu: Real) ->
 }
 
 impl ClothSolver for ClothSim {
+    fn info(&self) -> ClothInfo {
+        let s = &self.model.springs;
+        let structural = self.model.structural.clone();
+        ClothInfo {
+            method: self.integrator_name(),
+            nominal_substep: self.nominal_substep(),
+            particles: self.model.particle_count(),
+            springs: s.len(),
+            edges: structural.clone().map(|k| [s.i[k], s.j[k]]).collect(),
+            rest: structural.map(|k| s.rest[k]).collect(),
+            masses: self.model.mass.clone(),
+        }
+    }
+
+    fn initial_frame(&self) -> CoarseFrame {
+        ClothSim::initial_frame(self)
+    }
+
+    fn hold_handles(&mut self, first: usize, targets: &[Vec3]) {
+        for (h, p) in self.model.handles.iter_mut().skip(first).zip(targets) {
+            if is_finite(p) {
+                h.path.clear();
+                h.path.push((0.0, *p));
+            }
+        }
+    }
+
+    fn grab(&mut self, handle: Handle) {
+        ClothSim::grab(self, handle)
+    }
+
     fn step_frame(
         &mut self,
         frame: &mut CoarseFrame,

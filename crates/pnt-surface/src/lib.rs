@@ -13,9 +13,11 @@
 
 pub mod pn;
 pub mod refine;
+pub mod stage;
 
 pub use pn::PnPatch;
 pub use refine::{PnRefiner, RefineError};
+pub use stage::PnStage;
 
 #[cfg(test)]
 mod tests;

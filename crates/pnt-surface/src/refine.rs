@@ -6,7 +6,6 @@ use thiserror::Error;
 use tryon_core::frames::{FineSurface, FineVertexSource, lattice_index, lattice_len};
 use tryon_core::math::{Real, Vec3};
 use tryon_core::mesh::{MeshError, PolyMesh};
-use tryon_core::stages::Refiner;
 
 /// Highest tessellation level accepted (64 segments per coarse edge).
 pub const MAX_LEVEL: u8 = 6;
@@ -243,16 +242,5 @@ impl PnRefiner {
                 out.normals[k] = p.normal(s.bary);
             }
         }
-    }
-}
-
-impl Refiner for PnRefiner {
-    fn refine(
-        &mut self,
-        coarse_positions: &[Vec3],
-        coarse_normals: &[Vec3],
-        out: &mut FineSurface,
-    ) {
-        self.evaluate(coarse_positions, coarse_normals, out);
     }
 }

@@ -185,7 +185,7 @@ fn main() -> ExitCode {
                 p.frames,
                 p.fps,
                 p.garment.positions.len(),
-                p.stages.join(", ")
+                p.stages().join(", ")
             );
             Ok(())
         }),

@@ -4,6 +4,7 @@
 
 pub mod assets;
 pub mod frames;
+pub mod interact;
 pub mod math;
 pub mod measure;
 pub mod mesh;

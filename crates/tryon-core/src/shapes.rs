@@ -1,4 +1,5 @@
-//! Procedural closed shapes for fixtures and tests (icospheres and their affine images).
+//! Procedural closed shapes: icospheres and their affine images (fixtures, tests, the sphere body)
+//! and the table slab an object body stands on (P4's scene).
 
 use crate::math::{Real, Vec3};
 use crate::mesh::{Face, PolyMesh};
@@ -78,10 +79,94 @@ pub fn scale_about(mesh: &mut PolyMesh, center: Vec3, scale: Vec3) {
     }
 }
 
+/// A closed box `side` x `thick` x `side` with its top face at y = 0, the top and bottom split
+/// into `cells` x `cells` quads (so nearest-vertex tracking has vertices everywhere), faces
+/// wound outward.
+pub fn table_slab(side: Real, thick: Real, cells: usize) -> PolyMesh {
+    let n = cells.max(1);
+    let mut index: HashMap<(usize, usize, usize), u32> = HashMap::new();
+    let mut positions = Vec::new();
+    let mut vertex = |i: usize, j: usize, k: usize| -> u32 {
+        *index.entry((i, j, k)).or_insert_with(|| {
+            positions.push(Vec3::new(
+                side * (i as Real / n as Real - 0.5),
+                if j == 1 { 0.0 } else { -thick },
+                side * (k as Real / n as Real - 0.5),
+            ));
+            (positions.len() - 1) as u32
+        })
+    };
+    let mut quads: Vec<[u32; 4]> = Vec::new();
+    for a in 0..n {
+        for c in 0..n {
+            for j in [0, 1] {
+                quads.push([
+                    vertex(a, j, c),
+                    vertex(a + 1, j, c),
+                    vertex(a + 1, j, c + 1),
+                    vertex(a, j, c + 1),
+                ]);
+            }
+        }
+        for edge in [0, n] {
+            quads.push([
+                vertex(a, 0, edge),
+                vertex(a + 1, 0, edge),
+                vertex(a + 1, 1, edge),
+                vertex(a, 1, edge),
+            ]);
+            quads.push([
+                vertex(edge, 0, a),
+                vertex(edge, 0, a + 1),
+                vertex(edge, 1, a + 1),
+                vertex(edge, 1, a),
+            ]);
+        }
+    }
+    let centre = Vec3::new(0.0, -thick / 2.0, 0.0);
+    let faces = quads
+        .into_iter()
+        .map(|q| {
+            let p = q.map(|v| positions[v as usize]);
+            let normal = (p[1] - p[0]).cross(&(p[2] - p[0]));
+            let mid = (p[0] + p[1] + p[2] + p[3]) / 4.0;
+            if normal.dot(&(mid - centre)) < 0.0 {
+                Face::Quad([q[3], q[2], q[1], q[0]])
+            } else {
+                Face::Quad(q)
+            }
+        })
+        .collect();
+    PolyMesh { positions, faces }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::topology::Topology;
+
+    /// Signed volume enclosed by a mesh (positive when its faces wind outward).
+    fn volume(m: &PolyMesh) -> Real {
+        let (tris, _) = m.triangulate();
+        tris.iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|v| m.positions[v as usize]);
+                a.dot(&b.cross(&c)) / 6.0
+            })
+            .sum()
+    }
+
+    #[test]
+    fn table_slab_is_closed_outward_and_its_top_is_at_zero() {
+        let m = table_slab(1.5, 0.04, 7);
+        assert!(Topology::build(&m).unwrap().is_closed());
+        let v = volume(&m);
+        assert!((v - 1.5 * 1.5 * 0.04).abs() < 1e-9, "volume {v}");
+        let top = m.positions.iter().map(|p| p.y).fold(Real::MIN, Real::max);
+        assert_eq!(top, 0.0);
+        // The top and bottom are split into cells x cells quads: (cells + 1)^2 vertices each.
+        assert_eq!(m.positions.iter().filter(|p| p.y == 0.0).count(), 64);
+    }
 
     #[test]
     fn icosphere_is_closed_and_outward() {
@@ -89,16 +174,7 @@ mod tests {
         assert_eq!(m.positions.len(), 642);
         let t = Topology::build(&m).unwrap();
         assert!(t.is_closed());
-        let (tris, _) = m.triangulate();
-        let mut volume = 0.0;
-        for [a, b, c] in tris {
-            let (a, b, c) = (
-                m.positions[a as usize],
-                m.positions[b as usize],
-                m.positions[c as usize],
-            );
-            volume += a.dot(&b.cross(&c)) / 6.0;
-        }
+        let volume = volume(&m);
         let exact = 4.0 / 3.0 * std::f64::consts::PI * 0.027;
         assert!(
             volume > 0.95 * exact && volume < exact,

@@ -1,9 +1,15 @@
 //! The stage contracts: small object-safe traits over plain data. The caller owns the state; a stage
 //! owns only scratch memory. Each trait has a trivial implementation so a stage can be tested alone.
+//!
+//! The frame loop (tryon-pipeline) holds one object per seam: a [`MotionSource`] and a
+//! [`BodyModel`] (the body), a [`Follower`] (P1.3.4), a [`Collider`], a [`ClothSolver`] and an
+//! ordered list of [`SurfaceStage`]s (P1 section 4), and calls nothing else per frame but the
+//! garment's attachments.
 
 use crate::frames::{BodyFrame, CoarseFrame, Contact, FineSurface, FineVertexSource, StepReport};
+use crate::interact::Handle;
 use crate::math::{Real, Vec3};
-use crate::pose::Pose;
+use crate::pose::{Pose, Skeleton};
 
 /// A motion: the pose at time t.
 pub trait MotionSource: Send {
@@ -21,6 +27,51 @@ pub trait BodyModel: Send {
     fn triangles(&self) -> &[[u32; 3]];
     /// Deforms the body into `pose`, writing positions (and velocities when it can) into `out`.
     fn pose(&mut self, pose: &Pose, out: &mut BodyFrame);
+    /// The body's positions in `pose`, leaving the model's state (its velocity estimate) alone: for
+    /// exports and pictures of recorded frames.
+    fn shape_at(&self, pose: &Pose, out: &mut Vec<Vec3>);
+    /// The skeleton and skin weights, when the body is skinned (exports write a skinned mesh; the
+    /// follower carries the cloth with the root joint).
+    fn rig(&self) -> Option<Rig<'_>> {
+        None
+    }
+}
+
+/// A skinned body's rig, borrowed: rest mesh, skeleton, global rest joint positions and four
+/// (joint, weight) influences per vertex.
+#[derive(Clone, Copy, Debug)]
+pub struct Rig<'a> {
+    pub rest_positions: &'a [Vec3],
+    pub skeleton: &'a Skeleton,
+    pub joint_rest: &'a [Vec3],
+    pub joints: &'a [[u16; 4]],
+    pub weights: &'a [[Real; 4]],
+}
+
+impl Rig<'_> {
+    /// The root joint (the first without a parent; 0 for an empty skeleton) and its rest position.
+    pub fn root(&self) -> (usize, Vec3) {
+        let root = self
+            .skeleton
+            .parents
+            .iter()
+            .position(|p| p.is_none())
+            .unwrap_or(0);
+        (root, self.joint_rest.get(root).copied().unwrap_or_default())
+    }
+}
+
+/// P1.3.4, body following: cloth near the body is carried with it when the body moves, before the
+/// cloth is stepped against the body's new shape.
+pub trait Follower: Send {
+    /// Starts following: the body at time 0 (in `pose`) and the cloth as it starts.
+    fn start(&mut self, pose: &Pose, body: &BodyFrame, cloth: &[Vec3]);
+    /// The body moved to `body` (in `pose`) over `dt`: carries the cloth's positions and
+    /// velocities with it, and writes into `body.velocities` the body's velocities in the frame
+    /// the cloth is now simulated in.
+    fn carry(&mut self, pose: &Pose, body: &mut BodyFrame, cloth: &mut CoarseFrame, dt: Real);
+    /// Records the cloth against the body after the step.
+    fn record(&mut self, cloth: &[Vec3]);
 }
 
 /// Collision between points and the body.
@@ -93,8 +144,29 @@ impl Probe {
     };
 }
 
+/// What a cloth solver is, for reports and metrics.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ClothInfo {
+    /// The method's name (the integrator), as stats.json reports it.
+    pub method: &'static str,
+    /// The substep used when nothing goes wrong (s).
+    pub nominal_substep: Real,
+    pub particles: usize,
+    /// Force elements (springs), for reports.
+    pub springs: usize,
+    /// Structural edges (particle pairs) and their rest lengths: stretch is judged on these.
+    pub edges: Vec<[u32; 2]>,
+    pub rest: Vec<Real>,
+    /// Mass of every particle (kg), for energies.
+    pub masses: Vec<Real>,
+}
+
 /// One frame of coarse cloth dynamics against a collider.
 pub trait ClothSolver: Send {
+    /// What the solver is (constant over its life but for the grabbed particles).
+    fn info(&self) -> ClothInfo;
+    /// The cloth's state before the first frame: at rest, handles at their paths' starts.
+    fn initial_frame(&self) -> CoarseFrame;
     /// Advances `frame` by `dt`, resolving collisions with `collider`. Never fails: non-finite or
     /// exploding state is retried smaller or rolled back, and reported.
     fn step_frame(
@@ -103,18 +175,50 @@ pub trait ClothSolver: Send {
         dt: Real,
         collider: &mut dyn Collider,
     ) -> StepReport;
+    /// Holds the kinematic handles `first..first + targets.len()` (in the order the solver was
+    /// built with) at `targets` from now on, as elastic bands bound to the moving body are.
+    /// Handles it does not have and non-finite targets are ignored.
+    fn hold_handles(&mut self, first: usize, targets: &[Vec3]);
+    /// Hands `handle.particle` to a scripted path from now on (a user grabbing the cloth). A
+    /// particle it does not have, or an empty path, is ignored.
+    fn grab(&mut self, handle: Handle);
 }
 
-/// Coarse surface -> fine surface. Topology is built once at construction.
-pub trait Refiner: Send {
-    /// Evaluates fine positions and normals from coarse positions and vertex normals.
-    fn refine(&mut self, coarse_positions: &[Vec3], coarse_normals: &[Vec3], out: &mut FineSurface);
+/// Where a surface stage's work is timed: `work` runs once, its wall time counted under `part`.
+pub trait Clock {
+    fn time(&mut self, part: &'static str, work: &mut dyn FnMut());
 }
 
-/// Fine detail on the refined surface (P1 section 4): penetration removal, wrinkles, normals.
-pub trait DetailModel: Send {
-    /// Adjusts the fine surface in place.
-    fn apply(&mut self, coarse: &CoarseFrame, fine: &mut FineSurface, collider: &mut dyn Collider);
+/// A clock that only runs the work.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Untimed;
+
+impl Clock for Untimed {
+    fn time(&mut self, _part: &'static str, work: &mut dyn FnMut()) {
+        work()
+    }
+}
+
+/// What the surface stages read: the coarse frame just stepped, and the body when it moved.
+#[derive(Clone, Copy, Debug)]
+pub struct SurfaceInput<'a> {
+    pub coarse: &'a CoarseFrame,
+    pub body: Option<&'a BodyFrame>,
+}
+
+/// One stage of the detailed surface (P1 section 4: refinement, wrinkles, fine collision, normal
+/// blending), run in order on the pipeline's [`FineSurface`] after each coarse frame.
+pub trait SurfaceStage: Send {
+    /// Names of the timed parts this stage runs, in order: what `tryon check` lists and
+    /// stats.json times. A stage that would do nothing is not assembled.
+    fn parts(&self) -> Vec<&'static str>;
+    /// Updates `surface` from `input`, timing each part on `clock`.
+    fn run(&mut self, input: &SurfaceInput<'_>, surface: &mut FineSurface, clock: &mut dyn Clock);
+    /// The length restoration error this stage can judge on `surface` (mean |fine path length -
+    /// rest| / rest over compressed coarse edges, and how many edges counted), if any.
+    fn length_error(&self, _surface: &FineSurface) -> Option<(Real, usize)> {
+        None
+    }
 }
 
 /// A motion that holds the rest pose.
@@ -153,6 +257,9 @@ impl BodyModel for StaticBody {
         out.positions.clone_from(&self.positions);
         out.velocities.clear();
     }
+    fn shape_at(&self, _pose: &Pose, out: &mut Vec<Vec3>) {
+        out.clone_from(&self.positions);
+    }
 }
 
 /// No body: nothing collides.
@@ -171,10 +278,24 @@ impl Collider for NoCollider {
 }
 
 /// A cloth that does not move (only its clock advances).
-#[derive(Clone, Copy, Debug, Default)]
-pub struct FrozenCloth;
+#[derive(Clone, Debug, Default)]
+pub struct FrozenCloth {
+    pub rest: Vec<Vec3>,
+}
 
 impl ClothSolver for FrozenCloth {
+    fn info(&self) -> ClothInfo {
+        ClothInfo {
+            method: "frozen",
+            particles: self.rest.len(),
+            ..ClothInfo::default()
+        }
+    }
+    fn initial_frame(&self) -> CoarseFrame {
+        CoarseFrame::at_rest(self.rest.clone())
+    }
+    fn hold_handles(&mut self, _first: usize, _targets: &[Vec3]) {}
+    fn grab(&mut self, _handle: Handle) {}
     fn step_frame(
         &mut self,
         frame: &mut CoarseFrame,
@@ -190,19 +311,38 @@ impl ClothSolver for FrozenCloth {
     }
 }
 
-/// Level-0 refinement: the fine surface is the coarse triangle mesh itself.
+/// Level-0 refinement: the fine surface is the coarse triangle mesh itself, with its vertex normals.
 #[derive(Clone, Debug)]
 pub struct FlatRefiner {
     pub triangles: Vec<[u32; 3]>,
+    normals: Vec<Vec3>,
 }
 
-impl Refiner for FlatRefiner {
-    fn refine(
-        &mut self,
-        coarse_positions: &[Vec3],
-        coarse_normals: &[Vec3],
-        out: &mut FineSurface,
-    ) {
+impl FlatRefiner {
+    pub fn new(triangles: Vec<[u32; 3]>) -> Self {
+        FlatRefiner {
+            triangles,
+            normals: Vec::new(),
+        }
+    }
+}
+
+impl SurfaceStage for FlatRefiner {
+    fn parts(&self) -> Vec<&'static str> {
+        vec!["refine"]
+    }
+    fn run(&mut self, input: &SurfaceInput<'_>, out: &mut FineSurface, clock: &mut dyn Clock) {
+        let coarse_positions = &input.coarse.positions;
+        clock.time("refine", &mut || {
+            crate::math::vertex_normals(coarse_positions, &self.triangles, &mut self.normals);
+            self.flatten(coarse_positions, out);
+        });
+    }
+}
+
+impl FlatRefiner {
+    fn flatten(&self, coarse_positions: &[Vec3], out: &mut FineSurface) {
+        let coarse_normals = &self.normals;
         out.positions.clear();
         out.positions.extend_from_slice(coarse_positions);
         out.normals.clear();
@@ -225,20 +365,6 @@ impl Refiner for FlatRefiner {
                 }
             }
         }
-    }
-}
-
-/// No detail: the refined surface is final.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct NoDetail;
-
-impl DetailModel for NoDetail {
-    fn apply(
-        &mut self,
-        _coarse: &CoarseFrame,
-        _fine: &mut FineSurface,
-        _collider: &mut dyn Collider,
-    ) {
     }
 }
 
@@ -269,17 +395,25 @@ mod tests {
         let mut contacts = Vec::new();
         collider.resolve(&mut pts, &mut contacts);
         assert!(contacts.is_empty());
-        let mut cloth = CoarseFrame::at_rest(vec![Vec3::zeros(), Vec3::x(), Vec3::y()]);
-        let report = FrozenCloth.step_frame(&mut cloth, 0.5, collider.as_mut());
+        let mut solver = FrozenCloth {
+            rest: vec![Vec3::zeros(), Vec3::x(), Vec3::y()],
+        };
+        let mut cloth = solver.initial_frame();
+        let report = solver.step_frame(&mut cloth, 0.5, collider.as_mut());
         assert_eq!(cloth.time, 0.5);
         assert_eq!(report.substeps, 1);
-        let mut refiner = FlatRefiner {
-            triangles: vec![[0, 1, 2]],
-        };
+        assert_eq!(solver.info().particles, 3);
+        let mut refiner = FlatRefiner::new(vec![[0, 1, 2]]);
+        assert_eq!(refiner.parts(), ["refine"]);
         let mut fine = FineSurface::default();
-        refiner.refine(&cloth.positions, &[Vec3::z(); 3], &mut fine);
+        let input = SurfaceInput {
+            coarse: &cloth,
+            body: None,
+        };
+        refiner.run(&input, &mut fine, &mut Untimed);
         assert_eq!(fine.sources[2].bary, [0.0, 0.0, 1.0]);
-        NoDetail.apply(&cloth, &mut fine, collider.as_mut());
         assert_eq!(fine.positions, cloth.positions);
+        // The triangle lies in z = 0, wound counter-clockwise seen from +z.
+        assert_eq!(fine.normals, vec![Vec3::z(); 3]);
     }
 }

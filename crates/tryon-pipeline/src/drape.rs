@@ -1,18 +1,23 @@
 //! The drape scene (a reusable fixture): an N x N-particle cloth of 1 m side, horizontal, 0.5 m above
 //! a fixed sphere of radius 0.3 m at the origin, under gravity, 60 output frames per second for 2 s.
-//! It reports the median time per output frame, the largest edge stretch over the run and the deepest
-//! penetration of any particle into the sphere mesh judged by the exact referee.
+//! It is a scene like any other, assembled into a [`Pipeline`] and stepped by its frame loop, with
+//! the cloth solver set from the fixture's own parameters. It reports the median time per output
+//! frame, the largest edge stretch over the run and the deepest penetration of any particle into
+//! the sphere mesh judged by the exact referee.
 
+use crate::assemble::AssembleError;
 use crate::metrics::{median, penetration};
-use body_collide::{BodyError, ExactCollider, NearestVertexCollider};
-use cloth_dyn::{BuildClothError, ClothModel, ClothParams, ClothSim, IntegratorKind};
+use crate::pipeline::{LoopState, Pipeline};
+use crate::scene::{Scene, SceneError};
+use crate::timers::Timers;
+use cloth_dyn::{BuildClothError, ClothModel, ClothParams, ClothSim, IntegratorKind, presets};
+use std::path::Path;
 use std::time::Instant;
 use thiserror::Error;
-use tryon_core::frames::StepReport;
+use tryon_core::frames::{CoarseFrame, StepReport};
 use tryon_core::math::{Real, Vec3};
-use tryon_core::mesh::grid_xz;
-use tryon_core::shapes::icosphere;
-use tryon_core::stages::ClothSolver;
+
+pub use cloth_dyn::presets::drape as drape_params;
 
 /// Settings of the drape scene.
 #[derive(Clone, Debug, PartialEq)]
@@ -29,6 +34,8 @@ pub struct DrapeConfig {
     pub sphere_subdivisions: u32,
     /// Judge penetration with the exact referee after every frame (not timed).
     pub measure_penetration: bool,
+    /// Height of the sheet above the sphere's centre (m).
+    pub drop_height: Real,
 }
 
 /// What one frame of a drape run looked like (handed to the caller's progress callback).
@@ -55,53 +62,29 @@ impl DrapeConfig {
             integrator,
             fps: 60.0,
             duration: 2.0,
-            params: drape_params(n),
+            params: presets::drape(n),
             thickness: 0.002,
             sphere_subdivisions: 4,
             measure_penetration: true,
+            drop_height: 0.5,
         }
     }
-}
 
-/// The drape material at n particles per side. An explicit integrator at a fixed substep can only
-/// hold springs whose stiffness scales with particle mass (k / m bounds the stable step), so the
-/// springs are soft: inextensibility comes from Provot's strain limit (at rest length, with
-/// long-range lines); the compress/stretch ratio of P1 is kept. Bending is Bergou et al.'s quadratic model (the sheet is flat at rest), with a rigidity
-/// of 2e-6 N m at N = 64 scaled by the fourth power of the edge length, for the same reason as the
-/// springs: its squared frequency grows as rigidity / (density edge^4), and so it stays a fixed share
-/// (about 40%) of the springs' bound, which keeps 3 substeps per frame at N = 64.
-/// (Flexion springs with the bending limit crumpled less but pumped energy into the sheet until it
-/// hopped and slid off the sphere; see ARCHITECTURE.md.)
-pub fn drape_params(n: usize) -> ClothParams {
-    sheet_params(1.0 / (n.max(2) - 1) as Real, ClothParams::default().density)
-}
-
-/// The drape material for a flat sheet of edge `h` (m) and `density` (kg/m^2), as [`drape_params`]
-/// gives it at its resolution. (The scenes' `square` garment still takes the garment material: on
-/// P4's spot scene this one left more penetration, 7 mm against 1.6, not yet understood.)
-pub fn sheet_params(h: Real, density: Real) -> ClothParams {
-    let base = ClothParams::default();
-    let m = density * h * h;
-    let k = 2500.0 * m;
-    ClothParams {
-        density,
-        k_stretch: k,
-        k_compress: 0.1 * k,
-        k_shear: 0.1 * k,
-        k_bend: 0.0,
-        bending_rigidity: 2e-6 * (63.0 * h).powi(4),
-        spring_damping: 0.02 * m * 120.0,
-        // The limit at rest length with long-range lines and 8 passes keeps the whole run, impact
-        // included, within 3% (1.02 with 6 passes and no lines: about 1.10, for 2/3 of the time).
-        max_strain: Some(1.0),
-        strain_iterations: 8,
-        long_range: true,
-        // Plain Gauss-Seidel: over-relaxing a limit at rest length overshoots every correction
-        // into compression (mean edge 0.91 of rest at 1.8), and converges no faster here.
-        strain_relaxation: 1.0,
-        min_bend_ratio: None,
-        stretch_guard: Some(1.1),
-        ..base
+    /// The fixture as a scene file.
+    pub fn scene_text(&self) -> String {
+        format!(
+            "[scene]\nname = \"drape\"\nfps = {}\nduration = {}\nsettle = 0.0\n\
+             [body]\nkind = \"sphere\"\nradius = 0.3\nsubdivisions = {}\n\
+             [garment]\nkind = \"square\"\nparticles = {}\nsize = 1.0\ndrop_height = {}\n\
+             [cloth]\nmaterial = \"sheet\"\nthickness = {}\n\
+             [effects]\nfollow_body = false\n",
+            self.fps,
+            self.duration,
+            self.sphere_subdivisions,
+            self.n,
+            self.drop_height,
+            self.thickness
+        )
     }
 }
 
@@ -112,9 +95,11 @@ pub enum DrapeError {
     #[error("drape needs at least 2 particles per side, got {0}")]
     TooSmall(usize),
     #[error(transparent)]
-    Cloth(#[from] BuildClothError),
+    Scene(#[from] SceneError),
     #[error(transparent)]
-    Body(#[from] BodyError),
+    Assemble(#[from] AssembleError),
+    #[error(transparent)]
+    Cloth(#[from] BuildClothError),
 }
 
 /// What a drape run measured.
@@ -139,44 +124,62 @@ pub struct DrapeReport {
     pub steps: StepReport,
 }
 
-/// The drape scene, ready to step.
+/// The drape scene on the pipeline, ready to step.
 pub struct DrapeScene {
     pub config: DrapeConfig,
-    pub sim: ClothSim,
-    pub collider: NearestVertexCollider,
-    pub referee: ExactCollider,
-    pub frame: tryon_core::frames::CoarseFrame,
+    pub pipeline: Pipeline,
+    state: LoopState,
+    timers: Timers,
+    /// Output frames stepped so far.
+    pub stepped: usize,
 }
 
 impl std::fmt::Debug for DrapeScene {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("DrapeScene")
             .field("config", &self.config)
-            .field("sim", &self.sim)
+            .field("pipeline", &self.pipeline)
             .finish()
     }
 }
 
 impl DrapeScene {
-    /// Builds the cloth, the sphere and the referee.
+    /// Assembles the scene, sets its cloth solver from the configuration and starts the loop.
     pub fn new(config: DrapeConfig) -> Result<Self, DrapeError> {
+        let pipeline = Self::pipeline(&config)?;
+        Ok(Self::started(config, pipeline))
+    }
+
+    /// The fixture's scene assembled with the cloth solver the configuration asks for, not yet
+    /// started: a caller may still replace stages (a solver, a moving body), then call
+    /// [`DrapeScene::started`].
+    pub fn pipeline(config: &DrapeConfig) -> Result<Pipeline, DrapeError> {
         if config.n < 2 {
             return Err(DrapeError::TooSmall(config.n));
         }
-        let cloth = grid_xz(config.n - 1, config.n - 1, 1.0, 1.0, 0.5);
-        let model = ClothModel::build(&cloth, &config.params, vec![])?;
+        let scene = Scene::parse(&config.scene_text(), Path::new("<drape fixture>"))?;
+        let mut pipeline = Pipeline::new(scene)?;
+        let model = ClothModel::build(&pipeline.garment, &config.params, vec![])?;
         let sim = ClothSim::new(model, config.params.clone(), config.integrator);
-        let sphere = icosphere(0.3, config.sphere_subdivisions, Vec3::zeros());
-        let collider = NearestVertexCollider::new(&sphere, config.thickness)?;
-        let referee = ExactCollider::new(&sphere, 0.0)?;
-        let frame = sim.initial_frame();
-        Ok(DrapeScene {
+        pipeline.set_solver(Box::new(sim));
+        Ok(pipeline)
+    }
+
+    /// The fixture over an assembled pipeline, its loop started.
+    pub fn started(config: DrapeConfig, mut pipeline: Pipeline) -> Self {
+        let state = pipeline.start();
+        DrapeScene {
             config,
-            sim,
-            collider,
-            referee,
-            frame,
-        })
+            pipeline,
+            state,
+            timers: Timers::default(),
+            stepped: 0,
+        }
+    }
+
+    /// The cloth's state.
+    pub fn frame(&self) -> &CoarseFrame {
+        &self.pipeline.cloth
     }
 
     /// Number of output frames in the run.
@@ -184,38 +187,28 @@ impl DrapeScene {
         (self.config.duration * self.config.fps).round() as usize
     }
 
-    /// Steps one output frame.
+    /// Steps one output frame through the pipeline's frame loop.
     pub fn step(&mut self) -> StepReport {
-        self.sim
-            .step_frame(&mut self.frame, 1.0 / self.config.fps, &mut self.collider)
+        self.stepped += 1;
+        let t = self.pipeline.frame_time(self.stepped);
+        let r = self.pipeline.advance(&mut self.state, t, &mut self.timers);
+        self.timers.end_frame();
+        r
     }
 
     /// Runs the whole scene, calling `progress` after each frame.
     pub fn run(&mut self, mut progress: impl FnMut(&FrameTrace)) -> DrapeReport {
         let frames = self.frame_count();
-        let s = &self.sim.model.springs;
-        let edges: Vec<[u32; 2]> = self
-            .sim
-            .model
-            .structural
-            .clone()
-            .map(|k| [s.i[k], s.j[k]])
-            .collect();
-        let rest: Vec<Real> = self
-            .sim
-            .model
-            .structural
-            .clone()
-            .map(|k| s.rest[k])
-            .collect();
+        let info = self.pipeline.solver.info();
+        let (edges, rest) = (&info.edges, &info.rest);
         let mut times = Vec::with_capacity(frames);
         let mut report = DrapeReport {
             n: self.config.n,
-            particles: self.sim.model.particle_count(),
-            springs: s.len(),
-            integrator: self.sim.integrator_name(),
+            particles: info.particles,
+            springs: info.springs,
+            integrator: info.method,
             frames,
-            substep: self.sim.nominal_substep(),
+            substep: info.nominal_substep,
             ..DrapeReport::default()
         };
         for k in 0..frames {
@@ -223,38 +216,32 @@ impl DrapeScene {
             let r = self.step();
             times.push(t0.elapsed().as_secs_f64() * 1e3);
             report.steps.accumulate(&r);
-            let ratio = |e: usize| {
-                let x = &self.frame.positions;
-                (x[edges[e][0] as usize] - x[edges[e][1] as usize]).norm() / rest[e]
-            };
+            let x = &self.pipeline.cloth.positions;
+            let ratio =
+                |e: usize| (x[edges[e][0] as usize] - x[edges[e][1] as usize]).norm() / rest[e];
             let worst = (0..edges.len())
                 .max_by(|&a, &b| ratio(a).total_cmp(&ratio(b)))
                 .unwrap_or(0);
             let frame_stretch = if edges.is_empty() { 1.0 } else { ratio(worst) };
             report.max_stretch = report.max_stretch.max(frame_stretch);
-            report.max_drift = report
-                .max_drift
-                .max(horizontal_drift(&self.frame.positions));
+            report.max_drift = report.max_drift.max(horizontal_drift(x));
             if self.config.measure_penetration {
                 report.max_penetration = report
                     .max_penetration
-                    .max(penetration(&self.referee, &self.frame.positions).max);
+                    .max(penetration(&self.pipeline.referee, x).max);
             }
+            let v = &self.pipeline.cloth.velocities;
             progress(&FrameTrace {
                 frame: k + 1,
                 frames,
                 stretch: frame_stretch,
-                worst_at: edges
-                    .get(worst)
-                    .map_or(Vec3::zeros(), |e| self.frame.positions[e[0] as usize]),
+                worst_at: edges.get(worst).map_or(Vec3::zeros(), |e| x[e[0] as usize]),
                 contacts: r.contacts,
                 ms: times[k],
-                centroid: centroid(&self.frame.positions),
-                kinetic: self
-                    .frame
-                    .velocities
+                centroid: centroid(x),
+                kinetic: v
                     .iter()
-                    .zip(&self.sim.model.mass)
+                    .zip(&info.masses)
                     .map(|(v, m)| 0.5 * m * v.norm_squared())
                     .sum(),
             });

@@ -1,7 +1,7 @@
 //! Writing a run's outputs into a directory: scene.glb (skinned body + morph-target garment),
 //! preview.png (one frame, body and garment in different colours) and stats.json.
 
-use crate::assemble::{BodyDriver, Pipeline};
+use crate::pipeline::Pipeline;
 use crate::run::RunOutput;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
@@ -48,20 +48,19 @@ impl Pipeline {
             let poses: Vec<&Pose> = run.frames.iter().filter_map(|f| f.pose.as_ref()).collect();
             let roots: Vec<Vec3> = poses.iter().map(|p| p.root_translation).collect();
             let rots: Vec<_> = poses.iter().map(|p| p.local_rotations.clone()).collect();
-            let body = match &self.driver {
-                BodyDriver::Skinned { body: m, .. } if poses.len() == run.frames.len() => {
-                    BodyExport::Skinned(SkinnedExport {
-                        positions: &m.rest_positions,
-                        triangles: &run.body_triangles,
-                        joint_names: &m.skeleton.names,
-                        parents: &m.skeleton.parents,
-                        joint_rest: &m.joint_rest,
-                        joints: &m.skin.joints,
-                        weights: &m.skin.weights,
-                        root_translation: &roots,
-                        rotations: &rots,
-                    })
-                }
+            let rig = self.body.rig().filter(|_| self.motion.is_some());
+            let body = match rig {
+                Some(m) if poses.len() == run.frames.len() => BodyExport::Skinned(SkinnedExport {
+                    positions: m.rest_positions,
+                    triangles: &run.body_triangles,
+                    joint_names: &m.skeleton.names,
+                    parents: &m.skeleton.parents,
+                    joint_rest: m.joint_rest,
+                    joints: m.joints,
+                    weights: m.weights,
+                    root_translation: &roots,
+                    rotations: &rots,
+                }),
                 _ => BodyExport::Static {
                     positions: &self.body_mesh.positions,
                     triangles: &run.body_triangles,
@@ -86,7 +85,7 @@ impl Pipeline {
                 .unwrap_or(run.frames.len() - 1)
                 .min(run.frames.len() - 1);
             let rec = &run.frames[k];
-            let body = self.body_at(rec);
+            let body = self.body_at(rec.pose.as_ref());
             let meshes = [
                 PreviewMesh {
                     positions: &body,

@@ -1,22 +1,27 @@
 //! tryon-pipeline: the only crate that wires stages together: the scene file ([`Scene`], TOML),
-//! assembly of only the stages a scene enables ([`Pipeline`]), the timed frame loop with accuracy
-//! metrics judged by the exact referee ([`RunOutput`], [`Stats`]), the coarse loop, and the drape
-//! fixture used by tests and benchmarks.
+//! assembly of only the stages a scene enables ([`Pipeline`], its builders in `build`), the one
+//! frame loop (`pipeline`), whole runs with accuracy metrics judged by the exact referee
+//! ([`RunOutput`], [`Stats`]), exports, and the drape fixture (a scene on the same loop) used by
+//! tests and benchmarks.
+//!
+//! Modules depend in one direction: scene <- real <- build <- assemble -> pipeline <- run,
+//! export, drape; timers and metrics are leaves.
 
 pub mod assemble;
-pub mod coarse;
+pub mod build;
 pub mod drape;
 pub mod export;
-pub mod fine;
 pub mod metrics;
+pub mod pipeline;
 pub mod real;
 pub mod run;
 pub mod scene;
+pub mod timers;
 
-pub use assemble::{AssembleError, BodyDriver, Pipeline, garment_params};
-pub use coarse::CoarseLoop;
+pub use assemble::AssembleError;
 pub use drape::{DrapeConfig, DrapeError, DrapeReport, DrapeScene, FrameTrace};
 pub use export::ExportError;
+pub use pipeline::{LoopState, Pipeline};
 pub use real::AssetError;
 pub use run::{FrameRecord, RunOutput, Stats};
 pub use scene::{DEMO_SCENE, Scene, SceneError};

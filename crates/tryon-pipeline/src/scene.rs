@@ -5,6 +5,7 @@ use serde::Deserialize;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 use tryon_core::math::Real;
+use tryon_core::measure::Measurements;
 
 /// Why a scene file was rejected.
 #[derive(Debug, Error)]
@@ -533,6 +534,21 @@ impl Scene {
         Ok(scene)
     }
 
+    /// The scene's body measurements, defaults filled in.
+    pub fn measurements(&self) -> Measurements {
+        let d = Measurements::default();
+        let b = &self.body;
+        Measurements {
+            height: b.height.unwrap_or(d.height),
+            bust: b.bust.unwrap_or(d.bust),
+            waist: b.waist.unwrap_or(d.waist),
+            hip: b.hip.unwrap_or(d.hip),
+            shoulder_width: b.shoulder_width.unwrap_or(d.shoulder_width),
+            arm_length: b.arm_length.unwrap_or(d.arm_length),
+            inseam: b.inseam.unwrap_or(d.inseam),
+        }
+    }
+
     /// The embedded demo scene.
     pub fn demo() -> Scene {
         Scene::parse(DEMO_SCENE, Path::new("<embedded demo-dress-walk.toml>"))
@@ -574,7 +590,7 @@ impl Scene {
             range("body", k, v, lo, hi)?;
         }
         if b.kind == BodyKind::Mannequin {
-            match crate::assemble::measurements(self).validate() {
+            match self.measurements().validate() {
                 Ok(()) => {}
                 Err(tryon_core::measure::MeasureError::OutOfRange {
                     name,

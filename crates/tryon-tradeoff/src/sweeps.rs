@@ -1,7 +1,6 @@
 //! The sweeps and the report.
 
 use crate::plot::{Scale, Series, scatter};
-use body_collide::NearestVertexCollider;
 use cloth_dyn::{ClothSim, IntegratorKind};
 use pnt_surface::PnRefiner;
 use std::fmt::Write as _;
@@ -9,7 +8,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 use tryon_core::frames::{CoarseFrame, FineSurface, lattice_index};
 use tryon_core::math::{Real, Vec3, vertex_normals};
-use tryon_core::stages::ClothSolver;
+use tryon_pipeline::run::Timers;
 use tryon_pipeline::{Pipeline, Scene, Stats};
 
 /// The stages that make up the surface (P1 section 4).
@@ -153,24 +152,29 @@ fn collider_sweep(quick: bool, log: &mut String) -> Result<Vec<ColliderPoint>, S
     Ok(out)
 }
 
-/// The drape's cloth, alone, with its scene's material: for integrator sweeps at exact steps.
+/// The drape scene with its cloth solver replaced: for integrator sweeps at exact steps, on the
+/// pipeline's own frame loop.
 struct Drape {
-    pipeline: Pipeline,
+    scene: Scene,
+    /// The solver the scene assembles, whose parameters and model the sweeps vary.
+    sim0: ClothSim,
 }
 
 impl Drape {
     fn new() -> Result<Self, String> {
         let path = scenes_dir().join("drape-sphere.toml");
         let scene = Scene::load(&path).map_err(|e| e.to_string())?;
-        let pipeline = Pipeline::new(scene).map_err(|e| e.to_string())?;
-        Ok(Drape { pipeline })
+        let p = Pipeline::new(scene.clone()).map_err(|e| e.to_string())?;
+        let sim0 = tryon_pipeline::build::cloth_sim(&p.scene, &p.garment, vec![], &[])
+            .map_err(|e| e.to_string())?;
+        Ok(Drape { scene, sim0 })
     }
 
     /// Simulates `seconds` at fixed substep `h` with `kind` and stretch stiffness times `k_scale`;
     /// `raw` turns Provot's strain limit off (it would hide an unstable integrator).
-    /// Returns the final frame, ms per 1/60 s frame, and whether it stayed stable (no retry,
-    /// rollback or non-finite value; no edge at 3 times its rest length: soft cloth without a strain
-    /// limit may sag, an unstable step tears it apart).
+    /// Returns the final frame, ms per output frame (1/60 s), and whether it stayed stable (no
+    /// retry, rollback or non-finite value; no edge at 3 times its rest length: soft cloth without
+    /// a strain limit may sag, an unstable step tears it apart).
     fn simulate(
         &self,
         kind: IntegratorKind,
@@ -179,8 +183,7 @@ impl Drape {
         k_scale: Real,
         raw: bool,
     ) -> Result<(CoarseFrame, Real, bool), String> {
-        let sim0 = &self.pipeline.coarse.sim;
-        let mut params = sim0.params.clone();
+        let mut params = self.sim0.params.clone();
         if raw {
             params.max_strain = None;
         }
@@ -189,49 +192,45 @@ impl Drape {
         params.max_halvings = 0;
         params.stretch_guard = None;
         params.k_stretch *= k_scale;
-        let mut model = sim0.model.clone();
+        let mut model = self.sim0.model.clone();
         for s in &mut model.springs.k_stretch[model.structural.clone()] {
             *s *= k_scale;
         }
         model.packed = model.springs.packed();
-        let mut sim = ClothSim::new(model, params, kind);
-        let thickness = self.pipeline.scene.cloth.thickness.unwrap_or(0.004);
-        let mut collider = NearestVertexCollider::new(&self.pipeline.body_mesh, thickness)
-            .map_err(|e| e.to_string())?;
-        let mut frame = sim.initial_frame();
+        let mut p = Pipeline::new(self.scene.clone()).map_err(|e| e.to_string())?;
+        p.set_solver(Box::new(ClothSim::new(model, params, kind)));
         if raw {
             // A flat sheet in free fall does not deform, so nothing would excite an unstable
             // step: jiggle every particle by up to 1 mm (deterministically).
-            for (i, x) in frame.positions.iter_mut().enumerate() {
+            for (i, x) in p.cloth.positions.iter_mut().enumerate() {
                 let r = |k: Real| ((i as Real + 1.0) * k).sin() * 1e-3;
                 *x += Vec3::new(r(12.9898), r(78.233), r(37.719));
             }
         }
-        let dt = 1.0 / 60.0;
-        let frames = (seconds / dt).round() as usize;
+        let frames = (seconds * p.fps).round() as usize;
         let mut stable = true;
+        let mut st = p.start();
+        let mut timers = Timers::default();
         let t0 = Instant::now();
-        for _ in 0..frames {
-            let r = sim.step_frame(&mut frame, dt, &mut collider);
+        for k in 1..=frames {
+            let r = p.advance(&mut st, p.frame_time(k), &mut timers);
             if r.retries + r.rollbacks + r.non_finite_events > 0 {
                 stable = false;
             }
         }
         let ms = t0.elapsed().as_secs_f64() * 1e3 / frames.max(1) as Real;
-        let s = &sim.model.springs;
-        let worst = sim
-            .model
-            .structural
-            .clone()
-            .map(|k| {
-                (frame.positions[s.i[k] as usize] - frame.positions[s.j[k] as usize]).norm()
-                    / s.rest[k]
-            })
+        let info = p.solver.info();
+        let x = &p.cloth.positions;
+        let worst = info
+            .edges
+            .iter()
+            .zip(&info.rest)
+            .map(|(e, r)| (x[e[0] as usize] - x[e[1] as usize]).norm() / r)
             .fold(0.0, Real::max);
         if !(worst < 3.0) {
             stable = false;
         }
-        Ok((frame, ms, stable))
+        Ok((p.cloth, ms, stable))
     }
 }
 
@@ -394,7 +393,7 @@ fn refine_sweep(quick: bool, log: &mut String) -> Result<Vec<RefinePoint>, Strin
     for level in 0..=4u8 {
         let sets = vec![format!("effects.refine={level}")];
         let (s, p) = run_scene("demo-dress-walk.toml", &sets, Some(frames))?;
-        let x = &p.coarse.frame.positions;
+        let x = &p.cloth.positions;
         let mut normals = Vec::new();
         let (tris, _) = p.garment.triangulate();
         vertex_normals(x, &tris, &mut normals);

@@ -27,10 +27,13 @@
 //! - [`Detail::blend_normals`] (P1.4.4, eqs. 13-14): the deformed surface's normal blended with the
 //!   PN normal by `alpha = min(dh / h_normal, 1)`.
 
+pub mod stage;
+
+pub use stage::DetailStage;
 use thiserror::Error;
 use tryon_core::frames::{CoarseFrame, FineSurface, lattice_index, lattice_len};
 use tryon_core::math::{Real, Vec3, unit, vertex_normals};
-use tryon_core::stages::{Collider, DetailModel, Probe};
+use tryon_core::stages::{Collider, Probe};
 use tryon_core::topology::Csr;
 
 /// Parameters of the detail stages.
@@ -877,18 +880,6 @@ impl Detail {
             }
         }
         (if count > 0 { sum / count as Real } else { 0.0 }, count)
-    }
-}
-
-impl DetailModel for Detail {
-    fn apply(&mut self, coarse: &CoarseFrame, fine: &mut FineSurface, collider: &mut dyn Collider) {
-        self.wrinkle(coarse, fine);
-        if self.params.fine_collision {
-            self.fine_collision(coarse, fine, collider);
-        }
-        if self.params.blend_normals {
-            self.blend_normals(fine);
-        }
     }
 }
 

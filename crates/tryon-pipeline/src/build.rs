@@ -1,0 +1,336 @@
+//! One builder per stage of a scene: the body and its motion, the garment placed on it, the cloth
+//! solver, the colliders, the bands and the surface stages. `assemble.rs` calls them in order.
+
+use crate::real;
+use crate::scene::{
+    BodyKind, CollisionMethod, EffectsSection, GarmentKind, IntegratorName, MaterialName,
+    MotionKind, Scene,
+};
+use body_collide::{
+    BodyError, DepthMapCollider, ExactCollider, Mannequin, NearestVertexCollider, SdfCollider,
+    SkinnedBody,
+};
+use cloth_dyn::{
+    BuildClothError, ClothModel, ClothParams, ClothSim, Handle, IntegratorKind, presets,
+};
+use garment_fit::{DressParams, PatternError, SkirtParams};
+use mocap_retarget::{ArmRaise, ClipError, Walk, WalkParams};
+use thiserror::Error;
+use tryon_core::math::{Real, Vec3};
+use tryon_core::measure::MeasureError;
+use tryon_core::mesh::{Face, PolyMesh, grid_xz};
+use tryon_core::shapes::{icosphere, table_slab};
+use tryon_core::stages::{BodyModel, Collider, MotionSource, NoCollider, StaticBody};
+
+/// Why a scene could not be assembled (after it parsed and passed its range checks).
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum AssembleError {
+    #[error("body: {0}")]
+    Measurements(#[from] MeasureError),
+    #[error("body mesh: {0}")]
+    Body(#[from] BodyError),
+    #[error("garment: {0}")]
+    Pattern(#[from] PatternError),
+    #[error("cloth: {0}")]
+    Cloth(#[from] BuildClothError),
+    #[error("cloth: {0}")]
+    Params(#[from] cloth_dyn::params::ParamError),
+    #[error("motion: {0}")]
+    Motion(#[from] ClipError),
+    #[error(transparent)]
+    Asset(#[from] crate::real::AssetError),
+    #[error("garment mesh: {0}")]
+    GarmentTopology(#[from] tryon_core::topology::TopologyError),
+    #[error("refine: {0}")]
+    Refine(#[from] pnt_surface::RefineError),
+    #[error("surface detail: {0}")]
+    Detail(#[from] wrinkle::DetailError),
+}
+
+/// The body as assembled: its rest mesh, the model, the motion (`None` for a body that holds
+/// still), the MakeHuman body a garment binds to, and the length of the clip (s).
+pub(crate) struct BuiltBody {
+    pub mesh: PolyMesh,
+    pub model: Box<dyn BodyModel>,
+    pub motion: Option<Box<dyn MotionSource>>,
+    pub makehuman: Option<body_collide::MakeHumanBody>,
+    pub clip_len: Real,
+}
+
+/// A body that holds still at `mesh`.
+fn fixed(mesh: PolyMesh, clip_len: Real) -> BuiltBody {
+    let (triangles, _) = mesh.triangulate();
+    BuiltBody {
+        model: Box::new(StaticBody {
+            positions: mesh.positions.clone(),
+            triangles,
+        }),
+        mesh,
+        motion: None,
+        makehuman: None,
+        clip_len,
+    }
+}
+
+/// The scene's body and the motion driving it.
+pub(crate) fn body(scene: &Scene) -> Result<BuiltBody, AssembleError> {
+    let mo = &scene.motion;
+    Ok(match scene.body.kind {
+        BodyKind::Sphere => {
+            let r = scene.body.radius.unwrap_or(0.3);
+            let mesh = icosphere(r, scene.body.subdivisions.unwrap_or(4), Vec3::zeros());
+            fixed(mesh, mo.duration.unwrap_or(2.0))
+        }
+        BodyKind::Object => fixed(object_on_table(scene)?, mo.duration.unwrap_or(3.0)),
+        BodyKind::Mannequin => mannequin(scene)?,
+        BodyKind::Makehuman => {
+            let b = real::makehuman_body(scene)?;
+            let mesh = b.mesh();
+            let mut built = if mo.kind == MotionKind::Bvh {
+                let tips = b.joint_tails.iter().map(|t| Some(*t)).collect();
+                let file = mo.file.as_deref().unwrap_or_default();
+                let r = real::bvh_motion(scene, file, &b.skeleton, &b.joint_rest, tips)?;
+                BuiltBody {
+                    clip_len: r.duration(),
+                    model: Box::new(b.skinned()),
+                    motion: Some(Box::new(r)),
+                    mesh,
+                    makehuman: None,
+                }
+            } else {
+                fixed(mesh, mo.duration.unwrap_or(2.0))
+            };
+            built.makehuman = Some(b);
+            built
+        }
+    })
+}
+
+/// The parametric mannequin and its motion.
+fn mannequin(scene: &Scene) -> Result<BuiltBody, AssembleError> {
+    let m = scene.measurements();
+    let man = Mannequin::new(&m)?;
+    let mo = &scene.motion;
+    let motion: Box<dyn MotionSource> = match mo.kind {
+        MotionKind::Still => {
+            return Ok(fixed(man.mesh, mo.duration.unwrap_or(2.0)));
+        }
+        MotionKind::Walk => {
+            let d = WalkParams::default();
+            Box::new(Walk::new(
+                &man.skeleton,
+                WalkParams {
+                    period: mo.period.unwrap_or(d.period),
+                    hip_deg: mo.hip_deg.unwrap_or(d.hip_deg),
+                    knee_deg: mo.knee_deg.unwrap_or(d.knee_deg),
+                    arm_deg: mo.arm_deg.unwrap_or(d.arm_deg),
+                    duration: mo.duration.unwrap_or(d.duration),
+                    leg_length: man.landmarks.crotch + 0.06 * m.scale(),
+                    ..d
+                },
+            )?)
+        }
+        MotionKind::ArmRaise => {
+            Box::new(ArmRaise::new(&man.skeleton, mo.raise_deg.unwrap_or(100.0))?)
+        }
+        MotionKind::Bvh => Box::new(real::bvh_motion(
+            scene,
+            mo.file.as_deref().unwrap_or_default(),
+            &man.skeleton,
+            &man.joint_rest,
+            vec![None; man.joint_rest.len()],
+        )?),
+    };
+    let (tris, _) = man.mesh.triangulate();
+    let clip_len = motion.duration();
+    let model = SkinnedBody::new(
+        man.mesh.positions.clone(),
+        tris,
+        man.skeleton,
+        man.joint_rest,
+        man.skin,
+    );
+    Ok(BuiltBody {
+        mesh: man.mesh,
+        model: Box::new(model),
+        motion: Some(motion),
+        makehuman: None,
+        clip_len,
+    })
+}
+
+/// The scene's garment, before it is placed on the body.
+pub fn garment(
+    scene: &Scene,
+    makehuman: Option<&body_collide::MakeHumanBody>,
+) -> Result<PolyMesh, AssembleError> {
+    let m = scene.measurements();
+    let g = &scene.garment;
+    Ok(match g.kind {
+        GarmentKind::Dress => {
+            let d = DressParams::default();
+            let e = g.ease.clone().unwrap_or(d.ease.to_vec());
+            let p = DressParams {
+                ease: [e[0], e[1], e[2]],
+                flare: g.flare.unwrap_or(d.flare),
+                hem_above_knee: g.hem_above_knee.unwrap_or(d.hem_above_knee),
+                columns: g.columns.unwrap_or(d.columns),
+                row_spacing: g.row_spacing.unwrap_or(d.row_spacing),
+            };
+            garment_fit::dress(&m, &p)?.mesh
+        }
+        GarmentKind::Skirt => {
+            let d = SkirtParams::default();
+            let e = g.ease.clone().unwrap_or(d.ease.to_vec());
+            let p = SkirtParams {
+                ease: [e[0], e[1]],
+                flare: g.flare.unwrap_or(d.flare),
+                hem_above_knee: g.hem_above_knee.unwrap_or(d.hem_above_knee),
+                columns: g.columns.unwrap_or(d.columns),
+                row_spacing: g.row_spacing.unwrap_or(d.row_spacing),
+            };
+            garment_fit::skirt(&m, &p)?.mesh
+        }
+        GarmentKind::Square => {
+            let n = g.particles.unwrap_or(32).max(2) - 1;
+            let size = g.size.unwrap_or(1.0);
+            grid_xz(n, n, size, size, g.drop_height.unwrap_or(0.5))
+        }
+        GarmentKind::Mhclo => {
+            let (binding, obj) = real::mhclo(scene, g.file.as_deref().unwrap_or_default())?;
+            let rest = makehuman.map(|b| b.rest.as_slice()).unwrap_or(&[]);
+            let fitted = garment_fit::fit_garment(&binding, &obj, rest)
+                .map_err(|e| AssembleError::Asset(e.into()))?;
+            // Collapse sliver edges (doubled hems): below 15% of the median edge.
+            let min_len = 0.15 * garment_fit::median_edge(&fitted);
+            let welded = garment_fit::weld_short_edges(&fitted, min_len).map_err(|e| {
+                let name = binding.name.clone();
+                AssembleError::Asset(garment_fit::FitError::Mesh { name, source: e }.into())
+            })?;
+            welded.mesh
+        }
+    })
+}
+
+/// The cloth's material: the preset for the garment's resolution, then the scene's values.
+pub fn cloth_params(scene: &Scene, garment: &PolyMesh) -> Result<ClothParams, AssembleError> {
+    let (c, g, fx) = (&scene.cloth, &scene.garment, &scene.effects);
+    let density = c.density.unwrap_or(0.2);
+    let mut p = match c.material.unwrap_or_default() {
+        MaterialName::Garment => presets::garment(presets::mean_edge(garment), density),
+        // The grid's spacing (the mean triangle edge counts the quads' diagonals).
+        MaterialName::Sheet => {
+            let n = g.particles.unwrap_or(32).max(2) - 1;
+            presets::sheet(g.size.unwrap_or(1.0) / n as Real, density)
+        }
+    };
+    if g.kind == GarmentKind::Mhclo {
+        p = presets::modelled(p);
+    }
+    let set = |dst: &mut Real, v: Option<Real>| {
+        if let Some(v) = v {
+            *dst = v;
+        }
+    };
+    set(&mut p.k_stretch, c.k_stretch);
+    set(&mut p.k_compress, c.k_compress);
+    set(&mut p.k_shear, c.k_shear);
+    set(&mut p.k_bend, c.k_bend);
+    set(&mut p.spring_damping, c.spring_damping);
+    set(&mut p.max_substep, c.substep);
+    if let Some(s) = c.max_strain {
+        p.max_strain = (s > 0.0).then_some(s);
+    }
+    if let Some(n) = c.strain_iterations {
+        p.strain_iterations = n;
+    }
+    if let Some(r) = c.stretch_guard {
+        p.stretch_guard = (r > 0.0).then_some(r);
+    }
+    p.gravity = if fx.gravity {
+        tryon_core::math::GRAVITY
+    } else {
+        Vec3::zeros()
+    };
+    p.air_drag = fx.air_drag;
+    p.wind = Vec3::from(fx.wind);
+    p.friction = fx.friction;
+    p.velocity_damping = fx.velocity_damping;
+    p.validate()?;
+    Ok(p)
+}
+
+/// The scene's cloth solver: P1's particle cloth with the scene's integrator. `handles` (the
+/// bands, in order) are the model's first handles; `kinematic` particles are placed by others.
+pub fn cloth_sim(
+    scene: &Scene,
+    garment: &PolyMesh,
+    handles: Vec<Handle>,
+    kinematic: &[u32],
+) -> Result<ClothSim, AssembleError> {
+    let p = cloth_params(scene, garment)?;
+    let kind = match scene.cloth.integrator.unwrap_or(IntegratorName::Rk4) {
+        IntegratorName::Rk4 => IntegratorKind::Rk4,
+        IntegratorName::SymplecticEuler => IntegratorKind::SymplecticEuler,
+        IntegratorName::ImplicitEuler => IntegratorKind::ImplicitEuler,
+    };
+    let model = ClothModel::build_with_kinematic(garment, &p, handles, kinematic)?;
+    Ok(ClothSim::new(model, p, kind))
+}
+
+/// The collider `method` over `body`, keeping `thickness` from it. Adding a collider is one arm
+/// here and one variant of `CollisionMethod`.
+pub fn collider(
+    method: CollisionMethod,
+    body: &PolyMesh,
+    thickness: Real,
+    fx: &EffectsSection,
+) -> Result<Box<dyn Collider>, BodyError> {
+    Ok(match method {
+        CollisionMethod::NearestVertex => Box::new(NearestVertexCollider::new(body, thickness)?),
+        CollisionMethod::Exact => Box::new(ExactCollider::new(body, thickness)?),
+        CollisionMethod::Sdf => Box::new(SdfCollider::new(body, thickness, fx.sdf_resolution)?),
+        CollisionMethod::DepthMaps => {
+            Box::new(DepthMapCollider::new(body, thickness, fx.depth_resolution)?)
+        }
+        CollisionMethod::None => Box::new(NoCollider),
+    })
+}
+
+/// P4's scene body: the scene's OBJ scaled to metres, centred over the origin and standing on a
+/// closed table slab whose top is y = 0.
+fn object_on_table(scene: &Scene) -> Result<PolyMesh, AssembleError> {
+    let b = &scene.body;
+    let path = real::resolve(scene, "body.file", b.file.as_deref().unwrap_or_default())?;
+    let obj = tryon_io::read_obj(&path).map_err(real::AssetError::from)?;
+    let scale = b.scale.unwrap_or(1.0);
+    let mut mesh = PolyMesh {
+        positions: obj.positions.iter().map(|p| p * scale).collect(),
+        faces: obj.faces,
+    };
+    let (mut lo, mut hi) = (
+        Vec3::repeat(Real::INFINITY),
+        Vec3::repeat(Real::NEG_INFINITY),
+    );
+    for p in &mesh.positions {
+        lo = lo.inf(p);
+        hi = hi.sup(p);
+    }
+    let shift = Vec3::new(-(lo.x + hi.x) / 2.0, -lo.y, -(lo.z + hi.z) / 2.0);
+    for p in &mut mesh.positions {
+        *p += shift;
+    }
+    let side = b.table.unwrap_or(1.5);
+    if side > 0.0 {
+        let cells = ((side / 0.03).ceil() as usize).clamp(2, 200);
+        let slab = table_slab(side, 0.04, cells);
+        let base = mesh.positions.len() as u32;
+        mesh.positions.extend_from_slice(&slab.positions);
+        mesh.faces.extend(slab.faces.iter().map(|f| match f {
+            Face::Tri(t) => Face::Tri(t.map(|v| v + base)),
+            Face::Quad(q) => Face::Quad(q.map(|v| v + base)),
+        }));
+    }
+    Ok(mesh)
+}

@@ -1,0 +1,268 @@
+//! The assembled pipeline and the one frame loop every caller drives (the CLI, the drape fixture,
+//! the tradeoff sweeps, the benches and the tests): pose the body, carry the cloth with it, update
+//! the collider, hold the bands, step the cloth, place the attached pieces, then run the surface
+//! stages. Each stage is an object behind a tryon-core trait; a stage that is off is not there.
+
+use crate::scene::Scene;
+use crate::timers::Timers;
+use body_collide::{Bands, ExactCollider};
+use garment_fit::Attachment;
+use tryon_core::frames::{BodyFrame, CoarseFrame, FineSurface, StepReport};
+use tryon_core::interact::Grab;
+use tryon_core::math::{Real, Vec3};
+use tryon_core::mesh::PolyMesh;
+use tryon_core::pose::Pose;
+use tryon_core::stages::{
+    BodyModel, Clock, ClothSolver, Collider, Follower, MotionSource, NoCollider, SurfaceInput,
+    SurfaceStage, Untimed,
+};
+
+/// A scene ready to run: the stage objects and the state they share between frames.
+pub struct Pipeline {
+    pub scene: Scene,
+    /// The body in its rest pose.
+    pub body_mesh: PolyMesh,
+    /// The body model (a skinned body, or a fixed mesh).
+    pub body: Box<dyn BodyModel>,
+    /// The motion posing the body; `None` when the body holds still (it is then never re-posed).
+    pub motion: Option<Box<dyn MotionSource>>,
+    /// Body following (P1.3.4, with the root carry); only with a moving body.
+    pub follower: Option<Box<dyn Follower>>,
+    /// The cloth's body collider; `None` when the scene turns body collision off.
+    pub collider: Option<Box<dyn Collider>>,
+    /// Elastic bands bound to the body (waistbands, collars, cuffs), driving the solver's handles.
+    pub bands: Option<Bands>,
+    /// Vertices of small separate pieces (pockets, patches) placed on the piece beneath.
+    pub attachments: Vec<Attachment>,
+    pub solver: Box<dyn ClothSolver>,
+    /// The coarse cloth's state.
+    pub cloth: CoarseFrame,
+    /// The surface stages (P1 section 4) in order; empty when the scene does not refine.
+    pub surface_stages: Vec<Box<dyn SurfaceStage>>,
+    /// The detailed surface the stages write.
+    pub surface: FineSurface,
+    /// The exact referee judging penetration (always the body's true surface, no skin).
+    pub referee: ExactCollider,
+    /// The garment as placed on the rest pose (after clearing the body).
+    pub garment: PolyMesh,
+    /// Garment vertices moved out of the body when placing it.
+    pub placed_moved: usize,
+    pub frames: usize,
+    pub fps: Real,
+    /// A grab still to happen (`[garment] grab`).
+    pub grab: Option<Grab>,
+}
+
+impl std::fmt::Debug for Pipeline {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Pipeline")
+            .field("scene", &self.scene.scene.name)
+            .field("stages", &self.stages())
+            .field("frames", &self.frames)
+            .finish()
+    }
+}
+
+/// The frame loop's state between frames.
+#[derive(Clone, Debug)]
+pub struct LoopState {
+    pub body_frame: BodyFrame,
+    pub pose: Pose,
+}
+
+/// Runs the surface stages in order on `surface`.
+pub fn run_surface(
+    stages: &mut [Box<dyn SurfaceStage>],
+    input: &SurfaceInput<'_>,
+    surface: &mut FineSurface,
+    clock: &mut dyn Clock,
+) {
+    for s in stages {
+        s.run(input, surface, clock);
+    }
+}
+
+impl Pipeline {
+    /// The per-frame stages that will run, in order, as the stage objects name them.
+    pub fn stages(&self) -> Vec<&'static str> {
+        let moving = self.motion.is_some();
+        let mut names = Vec::new();
+        if moving {
+            names.extend(["motion", "skinning"]);
+        }
+        if self.grab.is_some() {
+            names.push("grab");
+        }
+        if moving && self.follower.is_some() {
+            names.push("follow_body");
+        }
+        if moving && self.collider.is_some() {
+            names.push("collider_update");
+        }
+        if moving && self.bands.is_some() {
+            names.push("bands");
+        }
+        names.push("cloth");
+        if !self.attachments.is_empty() {
+            names.push("attach_pieces");
+        }
+        for part in self.surface_stages.iter().flat_map(|s| s.parts()) {
+            if !names.contains(&part) {
+                names.push(part);
+            }
+        }
+        names.push("referee");
+        names
+    }
+
+    /// The time at which output frame `k` ends (s): the one clock every caller of the loop uses.
+    pub fn frame_time(&self, k: usize) -> Real {
+        k as Real * (1.0 / self.fps)
+    }
+
+    /// Replaces the cloth solver (its initial frame becomes the cloth's state): for sweeps and
+    /// fixtures that set the solver's parameters themselves. Call before [`Pipeline::start`].
+    pub fn set_solver(&mut self, solver: Box<dyn ClothSolver>) {
+        self.cloth = solver.initial_frame();
+        self.solver = solver;
+    }
+
+    /// Body vertex positions in a recorded pose (the rest mesh for a body that holds still).
+    pub fn body_at(&self, pose: Option<&Pose>) -> Vec<Vec3> {
+        match pose {
+            Some(p) if self.motion.is_some() => {
+                let mut out = Vec::new();
+                self.body.shape_at(p, &mut out);
+                out
+            }
+            _ => self.body_mesh.positions.clone(),
+        }
+    }
+
+    /// The loop's state at time 0: the body posed at the motion's start, the follower started on
+    /// the cloth, and the surface evaluated once on the starting cloth.
+    pub fn start(&mut self) -> LoopState {
+        let mut st = LoopState {
+            body_frame: BodyFrame {
+                time: 0.0,
+                positions: self.body_mesh.positions.clone(),
+                velocities: Vec::new(),
+            },
+            pose: Pose::default(),
+        };
+        if let Some(motion) = &mut self.motion {
+            motion.sample(0.0, &mut st.pose);
+            self.body.pose(&st.pose, &mut st.body_frame);
+        }
+        if let Some(f) = &mut self.follower {
+            f.start(&st.pose, &st.body_frame, &self.cloth.positions);
+        }
+        let input = SurfaceInput {
+            coarse: &self.cloth,
+            body: self.motion.is_some().then_some(&st.body_frame),
+        };
+        run_surface(
+            &mut self.surface_stages,
+            &input,
+            &mut self.surface,
+            &mut Untimed,
+        );
+        st
+    }
+
+    /// The coarse part of the output frame ending at time `t`: motion, skinning, following,
+    /// collider update, bands, grab, the cloth step and attached pieces (each timed into
+    /// `timers`). The referee is not run here.
+    pub fn advance_coarse(
+        &mut self,
+        st: &mut LoopState,
+        t: Real,
+        timers: &mut Timers,
+    ) -> StepReport {
+        let dt = 1.0 / self.fps;
+        let settle = self.scene.scene.settle;
+        let LoopState { body_frame, pose } = st;
+        if let Some(motion) = &mut self.motion {
+            timers.time("motion", || {
+                motion.sample((t - settle).max(0.0), pose);
+                pose.time = t;
+            });
+            timers.time("skinning", || self.body.pose(pose, body_frame));
+            if let Some(f) = &mut self.follower {
+                let cloth = &mut self.cloth;
+                timers.time("follow_body", || f.carry(pose, body_frame, cloth, dt));
+            }
+            if let Some(c) = &mut self.collider {
+                timers.time("collider_update", || c.update(body_frame));
+            }
+            if let Some(b) = &mut self.bands {
+                let solver = &mut self.solver;
+                let first = b.first_handle;
+                timers.time("bands", || {
+                    if let Some(targets) = b.targets(body_frame) {
+                        solver.hold_handles(first, targets);
+                    }
+                });
+            }
+        }
+        if let Some(handle) = self
+            .grab
+            .as_ref()
+            .and_then(|g| g.handle_at(t, &self.cloth.positions))
+        {
+            self.solver.grab(handle);
+            self.grab = None;
+        }
+        let mut none = NoCollider;
+        let collider: &mut dyn Collider = match &mut self.collider {
+            Some(c) => c.as_mut(),
+            None => &mut none,
+        };
+        let (solver, cloth) = (&mut self.solver, &mut self.cloth);
+        let report = timers.time("cloth", || solver.step_frame(cloth, dt, collider));
+        if !self.attachments.is_empty() {
+            timers.time("attach_pieces", || {
+                garment_fit::apply_attachments(
+                    &self.attachments,
+                    &mut cloth.positions,
+                    &mut cloth.velocities,
+                )
+            });
+        }
+        if let Some(f) = &mut self.follower {
+            timers.time("follow_body", || f.record(&cloth.positions));
+        }
+        report
+    }
+
+    /// One output frame ending at time `t`: [`Pipeline::advance_coarse`], then the surface stages
+    /// on its result.
+    pub fn advance(&mut self, st: &mut LoopState, t: Real, timers: &mut Timers) -> StepReport {
+        let report = self.advance_coarse(st, t, timers);
+        let input = SurfaceInput {
+            coarse: &self.cloth,
+            body: self.motion.is_some().then_some(&st.body_frame),
+        };
+        run_surface(&mut self.surface_stages, &input, &mut self.surface, timers);
+        report
+    }
+
+    /// The garment as output: the fine surface when the scene refines, else the coarse cloth.
+    pub fn output_garment(&self) -> &[Vec3] {
+        if self.surface_stages.is_empty() {
+            &self.cloth.positions
+        } else {
+            &self.surface.positions
+        }
+    }
+
+    /// The garment's output triangles (the fine surface's when the scene refines; after
+    /// [`Pipeline::start`]).
+    pub fn output_triangles(&self) -> Vec<[u32; 3]> {
+        if self.surface_stages.is_empty() {
+            self.garment.triangulate().0
+        } else {
+            self.surface.triangles.clone()
+        }
+    }
+}
