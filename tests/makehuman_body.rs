@@ -2,7 +2,8 @@
 //! skinning; and .mhclo garments fitted onto it.
 
 use crate::real_assets::data;
-use body_collide::{ExactCollider, MakeHumanBody, penetration_depths};
+use body_collide::{ExactCollider, penetration_depths};
+use body_model::MakeHumanBody;
 use tryon_core::Measurements;
 use tryon_core::math::Real;
 use tryon_io::{MhRig, load_makehuman};

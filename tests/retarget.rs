@@ -3,7 +3,7 @@
 //! directions, and stay finite.
 
 use crate::real_assets::data;
-use body_collide::{MakeHumanBody, joint_transforms};
+use body_model::{MakeHumanBody, joint_transforms};
 use mocap_retarget::{Placement, RetargetOptions, Rig, retarget};
 use tryon_core::assets::MotionClip;
 use tryon_core::math::{Real, Vec3};

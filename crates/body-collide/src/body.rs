@@ -178,4 +178,43 @@ impl BodyMesh {
         }
         (lo, hi)
     }
+
+    /// One vertex of each connected piece of the body (by the vertex graph), largest piece first, and
+    /// each vertex's piece in that order (`u32::MAX` for a vertex in no face).
+    pub fn pieces(&self) -> (Vec<u32>, Vec<u32>) {
+        let body = self;
+        let n = body.positions.len();
+        let mut label = vec![u32::MAX; n];
+        let mut found: Vec<(usize, u32)> = Vec::new();
+        for start in 0..n {
+            if label[start] != u32::MAX || body.vertex_faces.row(start).is_empty() {
+                continue;
+            }
+            let id = found.len() as u32;
+            label[start] = id;
+            let mut stack = vec![start as u32];
+            let mut size = 0;
+            while let Some(v) = stack.pop() {
+                size += 1;
+                for &w in body.ring.row(v as usize) {
+                    if label[w as usize] == u32::MAX {
+                        label[w as usize] = id;
+                        stack.push(w);
+                    }
+                }
+            }
+            found.push((size, start as u32));
+        }
+        let mut order: Vec<usize> = (0..found.len()).collect();
+        order.sort_by_key(|&i| std::cmp::Reverse(found[i].0));
+        let mut rank = vec![0u32; found.len()];
+        for (r, &i) in order.iter().enumerate() {
+            rank[i] = r as u32;
+        }
+        let piece_of = label
+            .into_iter()
+            .map(|l| if l == u32::MAX { l } else { rank[l as usize] })
+            .collect();
+        (order.into_iter().map(|i| found[i].1).collect(), piece_of)
+    }
 }

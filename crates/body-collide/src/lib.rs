@@ -1,4 +1,5 @@
-//! body-collide: the body as a collision object (P1 sections 3.3-3.4).
+//! body-collide: the body as a collision object (P1 sections 3.3-3.4). The bodies themselves
+//! (mannequin, MakeHuman, skinning) are in body-model.
 //!
 //! - [`NearestVertexCollider`]: P1's collider. Each point keeps its nearest body vertex, updated by a
 //!   local hill-climb from last step's vertex over the body's vertex graph; a point is inside when it is
@@ -8,9 +9,6 @@
 //! - [`DepthMapCollider`]: P4's six orthographic depth and normal maps of the body, on the CPU.
 //! - [`ExactCollider`]: closest point on the whole triangle mesh (parry3d-f64, with pseudo-normal
 //!   inside tests): the referee that measures every other collider.
-//! - [`Mannequin`]: a parametric body from measurements (mesh, skeleton, skin weights), posed by
-//!   [`SkinnedBody`] (linear blend skinning); [`girth_at`] measures it by slicing.
-//! - [`MakeHumanBody`]: a MakeHuman base mesh skinned by its own weights, morphed toward measurements.
 //! - [`BodyFollower`]: P1.3.4, points keep their coordinates relative to their nearest body face when
 //!   the body moves; as the frame loop's `Follower` it first carries the whole cloth with the root.
 //! - [`Bands`]: garment vertices bound to the body's surface (waistbands, collars, cuffs).
@@ -21,11 +19,7 @@ pub mod carry;
 pub mod depth;
 pub mod exact;
 pub mod follow;
-pub mod girth;
-pub mod makehuman;
-pub mod mannequin;
 pub mod sdf;
-pub mod skin;
 pub mod tracker;
 
 pub use bands::Bands;
@@ -34,14 +28,8 @@ pub use carry::{RootCarry, RootDelta, root_transform};
 pub use depth::DepthMapCollider;
 pub use exact::{ExactCollider, penetration_depths};
 pub use follow::{BodyFollower, FollowParams, SurfaceBinding};
-pub use girth::girth_at;
-pub use makehuman::{Girths, MakeHumanBody, MakeHumanError};
-pub use mannequin::{JOINT_NAMES, Mannequin};
 pub use sdf::SdfCollider;
-pub use skin::{SkinWeights, SkinnedBody, joint_transforms};
 pub use tracker::NearestVertexCollider;
 
-#[cfg(test)]
-mod mannequin_tests;
 #[cfg(test)]
 mod tests;

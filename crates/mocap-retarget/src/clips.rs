@@ -4,6 +4,7 @@
 
 use thiserror::Error;
 use tryon_core::math::{Real, UnitQuat, Vec3};
+use tryon_core::pose::mannequin_joints as J;
 use tryon_core::pose::{Pose, Skeleton};
 use tryon_core::stages::MotionSource;
 
@@ -57,8 +58,8 @@ struct Rig {
 impl Rig {
     fn new(s: &Skeleton) -> Result<Self, ClipError> {
         let arm = [
-            [joint(s, "upperarm_l")?, joint(s, "forearm_l")?],
-            [joint(s, "upperarm_r")?, joint(s, "forearm_r")?],
+            [joint(s, J::UPPERARM_L)?, joint(s, J::FOREARM_L)?],
+            [joint(s, J::UPPERARM_R)?, joint(s, J::FOREARM_R)?],
         ];
         let dir = |j: usize| {
             s.rest_offsets
@@ -68,20 +69,20 @@ impl Rig {
         };
         Ok(Rig {
             n: s.names.len(),
-            pelvis: joint(s, "pelvis")?,
-            spine: joint(s, "spine2")?,
+            pelvis: joint(s, J::PELVIS)?,
+            spine: joint(s, J::SPINE2)?,
             arm_dir: [dir(arm[0][1]), dir(arm[1][1])],
             arm,
             leg: [
                 [
-                    joint(s, "thigh_l")?,
-                    joint(s, "shin_l")?,
-                    joint(s, "foot_l")?,
+                    joint(s, J::THIGH_L)?,
+                    joint(s, J::SHIN_L)?,
+                    joint(s, J::FOOT_L)?,
                 ],
                 [
-                    joint(s, "thigh_r")?,
-                    joint(s, "shin_r")?,
-                    joint(s, "foot_r")?,
+                    joint(s, J::THIGH_R)?,
+                    joint(s, J::SHIN_R)?,
+                    joint(s, J::FOOT_R)?,
                 ],
             ],
         })
@@ -283,18 +284,18 @@ mod tests {
 
     fn skeleton() -> Skeleton {
         let names = [
-            "pelvis",
-            "spine2",
-            "upperarm_l",
-            "forearm_l",
-            "upperarm_r",
-            "forearm_r",
-            "thigh_l",
-            "shin_l",
-            "foot_l",
-            "thigh_r",
-            "shin_r",
-            "foot_r",
+            J::PELVIS,
+            J::SPINE2,
+            J::UPPERARM_L,
+            J::FOREARM_L,
+            J::UPPERARM_R,
+            J::FOREARM_R,
+            J::THIGH_L,
+            J::SHIN_L,
+            J::FOOT_L,
+            J::THIGH_R,
+            J::SHIN_R,
+            J::FOOT_R,
         ];
         Skeleton {
             names: names.iter().map(|s| s.to_string()).collect(),

@@ -3,6 +3,7 @@
 //! (CMU names), MakeHuman's default rig, and the parametric mannequin.
 
 use tryon_core::pose::Skeleton;
+use tryon_core::pose::mannequin_joints as J;
 
 /// A joint's role in a humanoid, independent of naming.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -202,29 +203,29 @@ pub const MAKEHUMAN: Scheme = Scheme {
 pub const MANNEQUIN: Scheme = Scheme {
     name: "mannequin",
     names: [
-        "pelvis",
-        "spine1",
-        "spine2",
-        "spine3",
-        "neck",
+        J::PELVIS,
+        J::SPINE1,
+        J::SPINE2,
+        J::SPINE3,
+        J::NECK,
         "",
-        "head",
-        "clavicle_l",
-        "upperarm_l",
-        "forearm_l",
-        "hand_l",
-        "clavicle_r",
-        "upperarm_r",
-        "forearm_r",
-        "hand_r",
-        "thigh_l",
-        "shin_l",
-        "foot_l",
-        "toe_l",
-        "thigh_r",
-        "shin_r",
-        "foot_r",
-        "toe_r",
+        J::HEAD,
+        J::CLAVICLE_L,
+        J::UPPERARM_L,
+        J::FOREARM_L,
+        J::HAND_L,
+        J::CLAVICLE_R,
+        J::UPPERARM_R,
+        J::FOREARM_R,
+        J::HAND_R,
+        J::THIGH_L,
+        J::SHIN_L,
+        J::FOOT_L,
+        J::TOE_L,
+        J::THIGH_R,
+        J::SHIN_R,
+        J::FOOT_R,
+        J::TOE_R,
     ],
 };
 

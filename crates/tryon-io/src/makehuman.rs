@@ -124,7 +124,7 @@ struct WeightsFile {
 }
 
 /// Reads .mhw skin weights as listed (normalising and keeping the strongest four is the skinning
-/// stage's job: `body_collide::SkinWeights::from_influences`).
+/// stage's job: `body_model::SkinWeights::from_influences`).
 pub fn read_mhw(path: &Path) -> Result<MhWeights, ReadError> {
     parse_mhw(&read_text(path)?, path)
 }

@@ -7,9 +7,9 @@ use crate::scene::{
     MotionKind, Scene,
 };
 use body_collide::{
-    BodyError, DepthMapCollider, ExactCollider, Mannequin, NearestVertexCollider, SdfCollider,
-    SkinnedBody,
+    BodyError, DepthMapCollider, ExactCollider, NearestVertexCollider, SdfCollider,
 };
+use body_model::{Mannequin, SkinnedBody};
 use cloth_dyn::{
     BuildClothError, ClothModel, ClothParams, ClothSim, Handle, IntegratorKind, presets,
 };
@@ -54,7 +54,7 @@ pub(crate) struct BuiltBody {
     pub mesh: PolyMesh,
     pub model: Box<dyn BodyModel>,
     pub motion: Option<Box<dyn MotionSource>>,
-    pub makehuman: Option<body_collide::MakeHumanBody>,
+    pub makehuman: Option<body_model::MakeHumanBody>,
     pub clip_len: Real,
 }
 
@@ -163,7 +163,7 @@ fn mannequin(scene: &Scene) -> Result<BuiltBody, AssembleError> {
 /// The scene's garment, before it is placed on the body.
 pub fn garment(
     scene: &Scene,
-    makehuman: Option<&body_collide::MakeHumanBody>,
+    makehuman: Option<&body_model::MakeHumanBody>,
 ) -> Result<PolyMesh, AssembleError> {
     let m = scene.measurements();
     let g = &scene.garment;

@@ -3,7 +3,7 @@
 //! fitted onto it, and BVH clips retargeted onto the body's skeleton.
 
 use crate::scene::{RigName, Scene};
-use body_collide::{MakeHumanBody, MakeHumanError};
+use body_model::{MakeHumanBody, MakeHumanError};
 use mocap_retarget::{Placement, RetargetError, RetargetOptions, Retargeted, Rig, retarget};
 use std::path::{Path, PathBuf};
 use thiserror::Error;

@@ -16,30 +16,7 @@ use tryon_core::mesh::{Face, PolyMesh};
 use tryon_core::pose::Skeleton;
 
 /// Joint names of the mannequin's skeleton (parents come first).
-pub const JOINT_NAMES: [&str; 22] = [
-    "pelvis",
-    "spine1",
-    "spine2",
-    "spine3",
-    "neck",
-    "head",
-    "clavicle_l",
-    "upperarm_l",
-    "forearm_l",
-    "hand_l",
-    "clavicle_r",
-    "upperarm_r",
-    "forearm_r",
-    "hand_r",
-    "thigh_l",
-    "shin_l",
-    "foot_l",
-    "toe_l",
-    "thigh_r",
-    "shin_r",
-    "foot_r",
-    "toe_r",
-];
+pub const JOINT_NAMES: [&str; 22] = tryon_core::pose::mannequin_joints::ALL;
 const PARENTS: [Option<usize>; 22] = [
     None,
     Some(0),
