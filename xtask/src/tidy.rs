@@ -1,7 +1,8 @@
 //! Architecture invariants, checked by `cargo xtask tidy` (and in CI):
 //! - stage crates depend on tryon-core and external crates only, never on each other;
 //! - only tryon-cli and xtask print or use anyhow;
-//! - every Rust source file opens with a `//!` line saying what it is for;
+//! - every Rust source file opens with a `//!` line saying what it is for, and has at most
+//!   600 lines;
 //! - no to-do or unimplemented macros, debug-print macros or ignored tests in the tree.
 
 use std::fs;
@@ -10,12 +11,15 @@ use std::path::{Path, PathBuf};
 const STAGES: &[&str] = &[
     "cloth-dyn",
     "body-collide",
+    "body-model",
     "pnt-surface",
     "wrinkle",
     "mocap-retarget",
     "garment-fit",
 ];
 const MAY_PRINT: &[&str] = &["tryon-cli", "tryon-tradeoff", "xtask"];
+/// Longest a source file may be (lines).
+const MAX_LINES: usize = 600;
 
 pub fn run() -> Result<(), String> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -101,6 +105,13 @@ fn check_file(file: &Path, may_print: bool, problems: &mut Vec<String>) {
     if !text.starts_with("//!") {
         problems.push(format!(
             "{}: does not open with a `//!` line saying what it is for",
+            file.display()
+        ));
+    }
+    let lines = text.lines().count();
+    if lines > MAX_LINES {
+        problems.push(format!(
+            "{}: {lines} lines (at most {MAX_LINES}: split it by what its parts do)",
             file.display()
         ));
     }

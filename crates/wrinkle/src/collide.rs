@@ -1,0 +1,199 @@
+//! Fine penetration removal (P1.4.2, hierarchical from the coarse contacts), blended normals
+//! (P1.4.4, eqs. 13-14) and the length restoration error.
+
+use crate::Detail;
+use tryon_core::frames::{CoarseFrame, FineSurface, lattice_index, lattice_len};
+use tryon_core::math::{Real, Vec3, unit, vertex_normals};
+use tryon_core::stages::Collider;
+
+impl Detail {
+    /// Probes the vertices in `self.which`, raises those within `skin` of the body and marks those
+    /// within `margin` as touching. Returns how many were raised.
+    pub(crate) fn probe_and_raise(
+        &mut self,
+        fine: &mut FineSurface,
+        collider: &mut dyn Collider,
+    ) -> usize {
+        let skin = self.params.skin;
+        let margin = self.params.margin;
+        let mut raised = 0;
+        for pass in 0..2 {
+            collider.probe_near(
+                &fine.positions,
+                &self.which,
+                margin.max(skin),
+                &mut self.probes,
+            );
+            let mut again = Vec::new();
+            for (k, &v) in self.which.iter().enumerate() {
+                let pr = self.probes[k];
+                let v = v as usize;
+                if pass == 0 && pr.distance < margin {
+                    self.touched[v] = self.stamp;
+                }
+                if !(pr.distance < skin)
+                    || !pr.distance.is_finite()
+                    || !tryon_core::math::is_finite(&pr.normal)
+                {
+                    continue;
+                }
+                let need = skin - pr.distance;
+                let n = self.control[v];
+                let along = n.dot(&pr.normal);
+                if along > 0.25 {
+                    let dh = need / along;
+                    self.raise[v] += dh;
+                    fine.positions[v] += n * dh;
+                } else {
+                    // The control direction runs along or into the body: leave along the body normal.
+                    fine.positions[v] += pr.normal * need;
+                }
+                if pass == 0 {
+                    raised += 1;
+                    again.push(v as u32);
+                }
+            }
+            if again.is_empty() {
+                break;
+            }
+            self.which = again;
+        }
+        raised
+    }
+
+    /// P1.4.2: hierarchical fine penetration removal (see the crate docs).
+    pub fn fine_collision(
+        &mut self,
+        coarse: &CoarseFrame,
+        fine: &mut FineSurface,
+        collider: &mut dyn Collider,
+    ) {
+        if self.reference.len() != fine.positions.len() {
+            self.take_reference(fine);
+        }
+        self.stamp = self.stamp.wrapping_add(1).max(1);
+        let stamp = self.stamp;
+        let mut probed = 0;
+        let mut raised = 0;
+        // Level 0: every coarse vertex (contacts count as touching).
+        self.which.clear();
+        self.which.extend(0..self.coarse_vertices as u32);
+        probed += self.which.len();
+        raised += self.probe_and_raise(fine, collider);
+        for c in &coarse.contacts {
+            if (c.point as usize) < self.coarse_vertices {
+                self.touched[c.point as usize] = stamp;
+            }
+        }
+        let n = self.n;
+        let per = lattice_len(n);
+        let level = n.trailing_zeros();
+        let faces: Vec<usize> = (0..self.coarse_tris.len())
+            .filter(|&f| {
+                self.coarse_tris[f]
+                    .iter()
+                    .any(|&v| self.touched[v as usize] == stamp)
+            })
+            .collect();
+        let mut visited = vec![false; 0];
+        visited.resize(fine.positions.len(), false);
+        for l in 1..=level {
+            let s = n >> l; // step of the level-l lattice
+            self.which.clear();
+            for &f in &faces {
+                let lat = &self.lattice[f * per..(f + 1) * per];
+                let at = |i: u32, j: u32| lat[lattice_index(n, i, j)] as usize;
+                let mut j = 0;
+                while j <= n {
+                    let mut i = 0;
+                    while i + j <= n {
+                        let (oi, oj) = ((i / s) % 2 == 1, (j / s) % 2 == 1);
+                        if oi || oj {
+                            let (a, b) = match (oi, oj) {
+                                (true, false) => (at(i - s, j), at(i + s, j)),
+                                (false, true) => (at(i, j - s), at(i, j + s)),
+                                _ => (at(i + s, j - s), at(i - s, j + s)),
+                            };
+                            let v = at(i, j);
+                            if !visited[v] && (self.touched[a] == stamp || self.touched[b] == stamp)
+                            {
+                                visited[v] = true;
+                                self.which.push(v as u32);
+                            }
+                        }
+                        i += s;
+                    }
+                    j += s;
+                }
+            }
+            probed += self.which.len();
+            raised += self.probe_and_raise(fine, collider);
+        }
+        self.stats.probed = probed;
+        self.stats.raised = raised;
+    }
+
+    /// P1.4.4: blends the deformed surface's normals with the PN normals by height (eqs. 13-14).
+    ///
+    /// Where the height is zero the PN normal is kept as it is, so the deformed surface's normal
+    /// (area-weighted over the vertex's triangles) is computed only where a vertex is raised.
+    pub fn blend_normals(&mut self, fine: &mut FineSurface) {
+        let gather = self.tri_count == fine.triangles.len()
+            && self.vertex_tris.offsets.len() == fine.positions.len() + 1;
+        if !gather {
+            vertex_normals(&fine.positions, &fine.triangles, &mut self.deformed_normals);
+        }
+        let h = self.params.h_normal;
+        let x = &fine.positions;
+        for i in 0..x.len() {
+            let dh = self.height[i] + self.raise[i];
+            let alpha = (dh / h).clamp(0.0, 1.0);
+            let pn = self.control.get(i).copied().unwrap_or(fine.normals[i]);
+            if !(alpha > 0.0) {
+                fine.normals[i] = pn;
+                continue;
+            }
+            let mut nd = if gather {
+                let mut sum = Vec3::zeros();
+                for &t in self.vertex_tris.row(i) {
+                    let [a, b, c] = fine.triangles[t as usize];
+                    let (a, b, c) = (a as usize, b as usize, c as usize);
+                    sum += (x[b] - x[a]).cross(&(x[c] - x[a]));
+                }
+                unit(&sum, 1e-30).unwrap_or(Vec3::y())
+            } else {
+                self.deformed_normals[i]
+            };
+            // The deformed surface is built from the same triangles, so its normal faces the
+            // PN normal's side; flip one that does not (a fold turned over).
+            if nd.dot(&pn) < 0.0 {
+                nd = -nd;
+            }
+            fine.normals[i] = unit(&(nd * alpha + pn * (1.0 - alpha)), 1e-30).unwrap_or(pn);
+        }
+    }
+
+    /// Length restoration over the coarse edges that are compressed on the reference surface:
+    /// mean of `|fine path length - rest| / rest` (with the path through `positions`), and how many
+    /// edges counted.
+    pub fn length_error(&self, positions: &[Vec3]) -> (Real, usize) {
+        let (mut sum, mut count) = (0.0, 0);
+        for e in 0..self.edges.len() {
+            let row = self.edge_fine.row(e);
+            let path = |x: &[Vec3]| -> Real {
+                row.windows(2)
+                    .map(|w| (x[w[1] as usize] - x[w[0] as usize]).norm())
+                    .sum()
+            };
+            let rest = self.edge_rest[e];
+            if self.reference.len() != positions.len() || !(rest > 0.0) {
+                continue;
+            }
+            if path(&self.reference) < rest {
+                sum += (path(positions) - rest).abs() / rest;
+                count += 1;
+            }
+        }
+        (if count > 0 { sum / count as Real } else { 0.0 }, count)
+    }
+}
