@@ -154,7 +154,9 @@ fn apply_set(cfg: &mut DrapeConfig, key: &str, x: f64) -> Result<(), String> {
 /// Writes a picture of the scene's current frame (the last run's, when several run).
 fn picture(scene: &DrapeScene, path: &std::path::Path) -> Result<(), String> {
     use tryon_io::{Camera, PreviewMesh, render, write_png};
-    let body = &scene.referee.body;
+    let p = &scene.pipeline;
+    let body = &p.referee.body;
+    let garment = p.output_triangles();
     let meshes = [
         PreviewMesh {
             positions: &body.positions,
@@ -162,8 +164,8 @@ fn picture(scene: &DrapeScene, path: &std::path::Path) -> Result<(), String> {
             color: [190, 190, 200],
         },
         PreviewMesh {
-            positions: &scene.frame.positions,
-            triangles: &scene.sim.model.triangles,
+            positions: p.output_garment(),
+            triangles: &garment,
             color: [200, 70, 60],
         },
     ];

@@ -1,6 +1,8 @@
-//! cargo xtask: project automation. `ci` (fmt, clippy, tests, tidy), `bench`, `drape`, `tidy`.
+//! cargo xtask: project automation. `ci` (fmt, clippy, tests, tidy), `bench`, `drape`, `tidy`,
+//! `tradeoff`, `outputs`.
 
 mod drape;
+mod outputs;
 mod tidy;
 
 use std::process::{Command, ExitCode};
@@ -15,6 +17,9 @@ commands:
   tradeoff [--quick] [--summary FILE]
                      what accuracy costs in time: collider, integrator, refinement and wrinkle
                      sweeps and P4's scene; report.md and SVG plots under target/tradeoff/
+  outputs save DIR | outputs compare OLD NEW
+                     run every scene (and variants) into DIR; compare two such runs (GLB and
+                     PNG bytes, stats.json but timings)
   tidy               check the architecture invariants";
 
 fn main() -> ExitCode {
@@ -24,6 +29,7 @@ fn main() -> ExitCode {
         Some("bench") => bench(&args[1..]),
         Some("drape") => drape::run(&args[1..]),
         Some("tidy") => tidy::run(),
+        Some("outputs") => outputs::run(&args[1..]),
         Some("tradeoff") => tradeoff(&args[1..]),
         Some("-h" | "--help" | "help") => {
             println!("{USAGE}");
