@@ -28,32 +28,48 @@ enum Command {
         /// Output directory (scene.glb, preview.png, stats.json).
         #[arg(long, default_value = "out/demo")]
         out: PathBuf,
-        /// Simulate only this many frames.
+        /// Simulate only this many frames (default: the scene's duration times its fps).
         #[arg(long)]
         frames: Option<usize>,
         /// No progress bar or summary.
         #[arg(long, short)]
         quiet: bool,
+        /// Override a value of the embedded scene, e.g. `--set effects.wrinkles=true` (repeatable).
+        #[arg(long = "set", value_name = "TABLE.KEY=VALUE")]
+        sets: Vec<String>,
     },
     /// Run a scene file.
     Run {
+        /// The scene file (TOML; see docs/scenes.md for every key).
         scene: PathBuf,
         /// Output directory; default out/<scene name>.
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Simulate only this many frames (default: the scene's duration times its fps).
         #[arg(long)]
         frames: Option<usize>,
+        /// No progress bar or summary.
         #[arg(long, short)]
         quiet: bool,
         /// Override a scene value, e.g. `--set effects.body_collision=sdf` (repeatable).
         #[arg(long = "set", value_name = "TABLE.KEY=VALUE")]
         sets: Vec<String>,
     },
-    /// Validate a scene file (parse, check values, assemble) without running it.
-    Check { scene: PathBuf },
+    /// Validate a scene file (parse, check values, assemble) without running it, and list the
+    /// stages it assembles.
+    Check {
+        /// The scene file (TOML).
+        scene: PathBuf,
+        /// Override a scene value before checking, as `run --set` does (repeatable).
+        #[arg(long = "set", value_name = "TABLE.KEY=VALUE")]
+        sets: Vec<String>,
+    },
     /// Summarise an asset: OBJ, BVH or MakeHuman file (counts, joints, frames, fps, bounding box,
     /// likely units).
-    Inspect { file: PathBuf },
+    Inspect {
+        /// The file: .obj, .bvh, .mhskel, .mhw, .target, .mhclo or .proxy.
+        file: PathBuf,
+    },
 }
 
 /// A failure and the exit code it maps to.
@@ -62,8 +78,33 @@ enum Failure {
     Internal(String),
 }
 
-fn load(path: &Path) -> Result<Scene, Failure> {
-    Scene::load(path).map_err(|e| Failure::BadInput(e.to_string()))
+fn load(path: &Path, sets: &[String]) -> Result<Scene, Failure> {
+    Scene::load_with_overrides(path, sets).map_err(|e| Failure::BadInput(e.to_string()))
+}
+
+/// The embedded demo scene with `sets` applied.
+fn demo_scene(sets: &[String]) -> Result<Scene, Failure> {
+    Scene::parse_with_overrides(
+        tryon_pipeline::DEMO_SCENE,
+        Path::new("<embedded demo-dress-walk.toml>"),
+        sets,
+    )
+    .map_err(|e| Failure::BadInput(e.to_string()))
+}
+
+/// Marks the default output folder `out/` as generated: a `.gitignore` of `*` inside it keeps
+/// runs out of version control wherever they are started (as cargo does for `target/`).
+fn mark_generated(out: &Path) {
+    let mut top = out.components();
+    if let Some(std::path::Component::Normal(first)) = top.next()
+        && first == "out"
+    {
+        let ignore = Path::new("out").join(".gitignore");
+        if !ignore.exists() {
+            // Best effort: a folder we cannot write to fails later with a clear error.
+            let _ = std::fs::create_dir_all("out").and_then(|()| std::fs::write(&ignore, "*\n"));
+        }
+    }
 }
 
 fn assemble(scene: Scene, file: &str) -> Result<Pipeline, Failure> {
@@ -86,6 +127,7 @@ fn run(mut p: Pipeline, out: &Path, frames: Option<usize>, quiet: bool) -> Resul
     bar.set_prefix(p.scene.scene.name.clone());
     let result = p.run(frames, |k, _| bar.set_position(k as u64));
     bar.finish_and_clear();
+    mark_generated(out);
     let files = p
         .export(&result, out)
         .map_err(|e| Failure::Internal(e.to_string()))?;
@@ -153,9 +195,14 @@ fn naming_scheme(file: &Path) -> Option<&'static str> {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Demo { out, frames, quiet } => {
-            assemble(Scene::demo(), "<embedded demo>").and_then(|p| run(p, &out, frames, quiet))
-        }
+        Command::Demo {
+            out,
+            frames,
+            quiet,
+            sets,
+        } => demo_scene(&sets)
+            .and_then(|s| assemble(s, "<embedded demo>"))
+            .and_then(|p| run(p, &out, frames, quiet)),
         Command::Run {
             scene,
             out,
@@ -176,7 +223,7 @@ fn main() -> ExitCode {
                 }
             })
             .map_err(|e| Failure::BadInput(e.to_string())),
-        Command::Check { scene } => load(&scene).and_then(|s| {
+        Command::Check { scene, sets } => load(&scene, &sets).and_then(|s| {
             let p = assemble(s, &scene.display().to_string())?;
             println!(
                 "{}: ok: scene `{}`, {} frames at {} fps, {} garment particles, stages: {}",
@@ -200,5 +247,39 @@ fn main() -> ExitCode {
             eprintln!("internal error: {m}");
             ExitCode::from(1)
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn demo_and_check_take_overrides_and_name_a_bad_one() {
+        let s = demo_scene(&["effects.wrinkles=true".into()]).unwrap_or_else(|_| panic!());
+        assert!(s.effects.wrinkles && !Scene::demo().effects.wrinkles);
+        let Err(Failure::BadInput(m)) = demo_scene(&["effects.refine=9".into()]) else {
+            panic!("a bad override must be bad input");
+        };
+        assert!(m.contains("effects.refine") && m.contains("0..=4"), "{m}");
+        let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/scenes/skirt-walk.toml");
+        let s = load(&file, &["effects.refine=2".into()]).unwrap_or_else(|_| panic!());
+        assert_eq!(s.effects.refine, 2);
+    }
+
+    #[test]
+    fn only_the_default_output_folder_is_marked_generated() {
+        let dir = std::env::temp_dir().join(format!("tryon-cli-mark-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let here = std::env::current_dir().unwrap();
+        std::env::set_current_dir(&dir).unwrap();
+        mark_generated(Path::new("elsewhere/x"));
+        let before = Path::new("out/.gitignore").exists();
+        mark_generated(Path::new("out/demo"));
+        let text = std::fs::read_to_string("out/.gitignore");
+        std::env::set_current_dir(here).unwrap();
+        let _ = std::fs::remove_dir_all(&dir);
+        assert!(!before);
+        assert_eq!(text.unwrap(), "*\n");
     }
 }
