@@ -111,7 +111,20 @@ fn demo_runs_a_few_frames_stays_close_and_writes_outputs_that_read_back() {
     assert_eq!(info.info().width, 800);
     let report = khronos_errors(&dir.join("scene.glb"));
     assert!(report.contains(" 0 errors"), "{report}");
+
+    // Streamed while running (what `tryon run` does): the same files, and nothing else left.
+    let streamed = scratch_dir("demo-streamed");
+    let mut q = Pipeline::new(Scene::demo()).unwrap();
+    let (stats, files) = q.run_to(&streamed, Some(10), |_, _| {}).unwrap();
+    assert_eq!(stats.metrics, run.stats.metrics);
+    assert_eq!(files.len(), 3);
+    for f in ["scene.glb", "preview.png"] {
+        let (a, b) = (std::fs::read(dir.join(f)), std::fs::read(streamed.join(f)));
+        assert!(a.unwrap() == b.unwrap(), "{f} differs when streamed");
+    }
+    assert_eq!(std::fs::read_dir(&streamed).unwrap().count(), 3);
     let _ = std::fs::remove_dir_all(&dir);
+    let _ = std::fs::remove_dir_all(&streamed);
 }
 
 #[test]

@@ -38,8 +38,8 @@ fn scenes_dir() -> PathBuf {
 fn run_one(file: &Path, sets: &[String], frames: Option<usize>, out: &Path) -> Result<(), String> {
     let scene = Scene::load_with_overrides(file, sets).map_err(|e| e.to_string())?;
     let mut p = Pipeline::new(scene).map_err(|e| format!("{}: {e}", file.display()))?;
-    let run = p.run(frames, |_, _| {});
-    p.export(&run, out).map_err(|e| e.to_string())?;
+    p.run_to(out, frames, |_, _| {})
+        .map_err(|e| e.to_string())?;
     Ok(())
 }
 

@@ -125,14 +125,12 @@ fn run(mut p: Pipeline, out: &Path, frames: Option<usize>, quiet: bool) -> Resul
         .progress_chars("=> "),
     );
     bar.set_prefix(p.scene.scene.name.clone());
-    let result = p.run(frames, |k, _| bar.set_position(k as u64));
+    let result = p.run_to(out, frames, |k, _| bar.set_position(k as u64));
     bar.finish_and_clear();
     mark_generated(out);
-    let files = p
-        .export(&result, out)
-        .map_err(|e| Failure::Internal(e.to_string()))?;
+    let (stats, files) = result.map_err(|e| Failure::Internal(e.to_string()))?;
     if !quiet {
-        let s = &result.stats;
+        let s = &stats;
         let m = &s.metrics;
         println!(
             "{}: {} frames at {} fps in {:.1} s ({} coarse particles, {} body vertices, {} substep {:.5} s, collider {})",

@@ -1,5 +1,5 @@
 //! tryon-io: file formats, every output written atomically (temporary file, then rename): GLB export
-//! of the animated try-on ([`write_glb`]), shaded z-buffered PNG previews ([`render`], [`write_png`]),
+//! of the animated try-on, written as the run goes ([`GlbWriter`]), shaded z-buffered PNG previews ([`render`], [`write_png`]),
 //! and JSON reports ([`write_json`]); readers of real assets ([`read_obj`] keeping vertex order,
 //! MakeHuman [`read_mhskel`], [`read_mhw`], [`read_target`], [`read_binding`], and [`read_bvh`]).
 
@@ -7,16 +7,17 @@ pub mod atomic;
 pub mod bvh;
 pub mod data;
 pub mod glb;
+mod glb_layout;
 pub mod inspect;
 pub mod makehuman;
 pub mod obj;
 pub mod preview;
 pub mod read;
 
-pub use atomic::write_atomic;
+pub use atomic::{write_atomic, write_atomic_with};
 pub use bvh::{guess_unit, parse_bvh, read_bvh};
 pub use data::{DATA_ENV, data_root, data_root_from};
-pub use glb::{AnimatedScene, BodyExport, GlbError, SkinnedExport, glb_bytes, write_glb};
+pub use glb::{BodyExport, FramePose, GlbError, GlbHeader, GlbWriter, SkinnedExport};
 pub use makehuman::{MhRig, load_makehuman, read_binding, read_mhskel, read_mhw, read_target};
 pub use obj::{parse_obj, read_obj};
 pub use preview::{Camera, Image, PreviewError, PreviewMesh, render, write_png};

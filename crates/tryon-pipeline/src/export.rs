@@ -1,15 +1,15 @@
-//! Writing a run's outputs into a directory: scene.glb (skinned body + morph-target garment),
-//! preview.png (one frame, body and garment in different colours) and stats.json.
+//! Writing a run's outputs into a directory as the run goes: scene.glb (skinned body + morph-target
+//! garment, streamed by tryon-io's `GlbWriter`), preview.png (one frame, body and garment in
+//! different colours; only that frame is kept) and stats.json (at the end).
 
 use crate::pipeline::Pipeline;
-use crate::run::RunOutput;
+use crate::run::{FrameRecord, FrameSink, RunHeader, RunOutput, Stats};
+use crate::scene::OutputSection;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
-use tryon_core::math::Vec3;
-use tryon_core::pose::Pose;
 use tryon_io::{
-    AnimatedScene, BodyExport, Camera, GlbError, PreviewError, PreviewMesh, SkinnedExport, render,
-    write_glb, write_json, write_png,
+    BodyExport, Camera, FramePose, GlbError, GlbHeader, GlbWriter, PreviewError, PreviewMesh,
+    SkinnedExport, render, write_json, write_png,
 };
 
 /// Why an output could not be written.
@@ -32,87 +32,168 @@ pub enum ExportError {
     },
 }
 
-impl Pipeline {
-    /// Writes the outputs the scene asks for into `dir`; returns the files written.
-    pub fn export(&self, run: &RunOutput, dir: &Path) -> Result<Vec<PathBuf>, ExportError> {
+/// The outputs a scene asks for, taking frames as they are made.
+#[derive(Debug)]
+pub struct Outputs {
+    dir: PathBuf,
+    config: OutputSection,
+    glb: Option<GlbWriter>,
+    /// The frame the preview shows (the chosen one once reached, else the latest).
+    preview: Option<(usize, FrameRecord)>,
+    frames: usize,
+    garment_triangles: Vec<[u32; 3]>,
+    body_triangles: Vec<[u32; 3]>,
+    error: Option<ExportError>,
+}
+
+impl Outputs {
+    /// Creates `dir` for the outputs `config` asks for.
+    pub fn new(dir: &Path, config: &OutputSection) -> Result<Outputs, ExportError> {
         std::fs::create_dir_all(dir).map_err(|source| ExportError::Dir {
             path: dir.to_path_buf(),
             source,
         })?;
-        let o = &self.scene.output;
-        let mut written = Vec::new();
-        if o.glb && !run.frames.is_empty() {
-            let path = dir.join("scene.glb");
-            let times: Vec<f64> = run.frames.iter().map(|f| f.time).collect();
-            let garment: Vec<Vec<Vec3>> = run.frames.iter().map(|f| f.garment.clone()).collect();
-            let poses: Vec<&Pose> = run.frames.iter().filter_map(|f| f.pose.as_ref()).collect();
-            let roots: Vec<Vec3> = poses.iter().map(|p| p.root_translation).collect();
-            let rots: Vec<_> = poses.iter().map(|p| p.local_rotations.clone()).collect();
-            let rig = self.body.rig().filter(|_| self.motion.is_some());
-            let body = match rig {
-                Some(m) if poses.len() == run.frames.len() => BodyExport::Skinned(SkinnedExport {
-                    positions: m.rest_positions,
-                    triangles: &run.body_triangles,
-                    joint_names: &m.skeleton.names,
-                    parents: &m.skeleton.parents,
-                    joint_rest: m.joint_rest,
-                    joints: m.joints,
-                    weights: m.weights,
-                    root_translation: &roots,
-                    rotations: &rots,
-                }),
-                _ => BodyExport::Static {
-                    positions: &self.body_mesh.positions,
-                    triangles: &run.body_triangles,
-                },
-            };
-            write_glb(
-                &path,
-                &AnimatedScene {
-                    name: &self.scene.scene.name,
-                    times: &times,
-                    body,
-                    garment_triangles: &run.garment_triangles,
-                    garment_frames: &garment,
-                },
-            )?;
-            written.push(path);
+        Ok(Outputs {
+            dir: dir.to_path_buf(),
+            config: config.clone(),
+            glb: None,
+            preview: None,
+            frames: 0,
+            garment_triangles: Vec::new(),
+            body_triangles: Vec::new(),
+            error: None,
+        })
+    }
+
+    /// Writes what is left (the GLB's layout, the preview, stats.json) and returns the files
+    /// written, or the first error met while writing.
+    pub fn finish(mut self, p: &Pipeline, stats: &Stats) -> Result<Vec<PathBuf>, ExportError> {
+        if let Some(e) = self.error.take() {
+            return Err(e);
         }
-        if o.preview && !run.frames.is_empty() {
-            let path = dir.join("preview.png");
-            let k = o
-                .preview_frame
-                .unwrap_or(run.frames.len() - 1)
-                .min(run.frames.len() - 1);
-            let rec = &run.frames[k];
-            let body = self.body_at(rec.pose.as_ref());
+        let mut written = Vec::new();
+        if let Some(glb) = self.glb.take()
+            && self.frames > 0
+        {
+            glb.finish()?;
+            written.push(self.dir.join("scene.glb"));
+        }
+        if let Some((_, rec)) = &self.preview {
+            let path = self.dir.join("preview.png");
+            let body = p.body_at(rec.pose.as_ref());
             let meshes = [
                 PreviewMesh {
                     positions: &body,
-                    triangles: &run.body_triangles,
+                    triangles: &self.body_triangles,
                     color: [205, 170, 150],
                 },
                 PreviewMesh {
                     positions: &rec.garment,
-                    triangles: &run.garment_triangles,
+                    triangles: &self.garment_triangles,
                     color: [55, 85, 170],
                 },
             ];
             let cam = Camera::framing(&meshes);
-            write_png(
-                &path,
-                &render(&meshes, &cam, o.preview_width, o.preview_height),
-            )?;
+            let (w, h) = (self.config.preview_width, self.config.preview_height);
+            write_png(&path, &render(&meshes, &cam, w, h))?;
             written.push(path);
         }
-        if o.stats {
-            let path = dir.join("stats.json");
-            write_json(&path, &run.stats).map_err(|source| ExportError::Json {
+        if self.config.stats {
+            let path = self.dir.join("stats.json");
+            write_json(&path, stats).map_err(|source| ExportError::Json {
                 path: path.clone(),
                 source,
             })?;
             written.push(path);
         }
         Ok(written)
+    }
+}
+
+impl FrameSink for Outputs {
+    fn begin(&mut self, h: &RunHeader<'_>) {
+        self.garment_triangles = h.garment_triangles.to_vec();
+        self.body_triangles = h.body_triangles.to_vec();
+        if !self.config.glb {
+            return;
+        }
+        let body = match h.rig {
+            Some(r) => BodyExport::Skinned(SkinnedExport {
+                positions: r.rest_positions,
+                triangles: h.body_triangles,
+                joint_names: &r.skeleton.names,
+                parents: &r.skeleton.parents,
+                joint_rest: r.joint_rest,
+                joints: r.joints,
+                weights: r.weights,
+            }),
+            None => BodyExport::Static {
+                positions: h.body_positions,
+                triangles: h.body_triangles,
+            },
+        };
+        let header = GlbHeader {
+            name: h.name,
+            body,
+            garment_triangles: h.garment_triangles,
+        };
+        match GlbWriter::create(&self.dir.join("scene.glb"), &header) {
+            Ok(w) => self.glb = Some(w),
+            Err(e) => self.error = Some(e.into()),
+        }
+    }
+
+    fn frame(&mut self, rec: &FrameRecord) {
+        if let Some(glb) = &mut self.glb {
+            let pose = rec.pose.as_ref().map(|p| FramePose {
+                root_translation: p.root_translation,
+                rotations: &p.local_rotations,
+            });
+            glb.frame(rec.time, &rec.garment, pose);
+        }
+        if self.config.preview {
+            let k = self.frames;
+            let reached = matches!((&self.preview, self.config.preview_frame),
+                (Some((at, _)), Some(want)) if *at == want);
+            if !reached {
+                self.preview = Some((k, rec.clone()));
+            }
+        }
+        self.frames += 1;
+    }
+}
+
+impl Pipeline {
+    /// Runs the scene (`frames` output frames, its own count when `None`) straight into the
+    /// outputs it asks for in `dir`: frames are written as they are made, so memory does not grow
+    /// with the run's length. Returns the statistics and the files written.
+    pub fn run_to(
+        &mut self,
+        dir: &Path,
+        frames: Option<usize>,
+        progress: impl FnMut(usize, usize),
+    ) -> Result<(Stats, Vec<PathBuf>), ExportError> {
+        let mut out = Outputs::new(dir, &self.scene.output)?;
+        let summary = self.run_into(frames, progress, &mut out);
+        let files = out.finish(self, &summary.stats)?;
+        Ok((summary.stats, files))
+    }
+
+    /// Writes the outputs the scene asks for of a run kept in memory into `dir`; returns the
+    /// files written.
+    pub fn export(&self, run: &RunOutput, dir: &Path) -> Result<Vec<PathBuf>, ExportError> {
+        let mut out = Outputs::new(dir, &self.scene.output)?;
+        let moving = run.frames.iter().all(|f| f.pose.is_some());
+        out.begin(&RunHeader {
+            name: &self.scene.scene.name,
+            garment_triangles: &run.garment_triangles,
+            body_positions: &self.body_mesh.positions,
+            body_triangles: &run.body_triangles,
+            rig: self.body.rig().filter(|_| moving && self.motion.is_some()),
+        });
+        for f in &run.frames {
+            out.frame(f);
+        }
+        out.finish(self, &run.stats)
     }
 }

@@ -20,8 +20,8 @@ pub mod timers;
 
 pub use assemble::AssembleError;
 pub use drape::{DrapeConfig, DrapeError, DrapeReport, DrapeScene, FrameTrace};
-pub use export::ExportError;
+pub use export::{ExportError, Outputs};
 pub use pipeline::{LoopState, Pipeline};
 pub use real::AssetError;
-pub use run::{FrameRecord, RunOutput, Stats};
+pub use run::{FrameRecord, FrameSink, RunHeader, RunOutput, RunSummary, Stats};
 pub use scene::{DEMO_SCENE, Scene, SceneError};

@@ -89,7 +89,43 @@ pub struct Stats {
     pub per_frame: Vec<FrameStats>,
 }
 
-/// What a run produced.
+/// What a run's sinks learn before the first frame: what stays the same over the run.
+#[derive(Clone, Copy, Debug)]
+pub struct RunHeader<'a> {
+    pub name: &'a str,
+    pub garment_triangles: &'a [[u32; 3]],
+    /// The body's rest positions and triangles.
+    pub body_positions: &'a [Vec3],
+    pub body_triangles: &'a [[u32; 3]],
+    /// The body's rig when it moves (every frame then carries its pose).
+    pub rig: Option<tryon_core::stages::Rig<'a>>,
+}
+
+/// Where a run's frames go as they are made (an exporter streaming them to files, or memory).
+/// Writing may fail; a sink keeps its first error for whoever finishes it, and the run goes on.
+pub trait FrameSink {
+    /// Called once, before the first frame.
+    fn begin(&mut self, _header: &RunHeader<'_>) {}
+    /// Frame 0 is the garment as placed; then one record per simulated frame.
+    fn frame(&mut self, record: &FrameRecord);
+}
+
+/// Keeps every frame in memory.
+impl FrameSink for Vec<FrameRecord> {
+    fn frame(&mut self, record: &FrameRecord) {
+        self.push(record.clone());
+    }
+}
+
+/// What a run produced, beside the frames its sink took.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RunSummary {
+    pub garment_triangles: Vec<[u32; 3]>,
+    pub body_triangles: Vec<[u32; 3]>,
+    pub stats: Stats,
+}
+
+/// What a run produced, every frame kept in memory.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct RunOutput {
     /// Frame 0 is the garment as placed; then one record per simulated frame.
@@ -104,12 +140,26 @@ type Pending = (CoarseFrame, BodyFrame, Option<Pose>, StepReport);
 
 impl Pipeline {
     /// Runs `frames` output frames (the scene's count when `None`), calling `progress(done, total)`
-    /// after each.
-    pub fn run(
+    /// after each, and keeps every frame in memory.
+    pub fn run(&mut self, frames: Option<usize>, progress: impl FnMut(usize, usize)) -> RunOutput {
+        let mut kept: Vec<FrameRecord> = Vec::new();
+        let s = self.run_into(frames, progress, &mut kept);
+        RunOutput {
+            frames: kept,
+            garment_triangles: s.garment_triangles,
+            body_triangles: s.body_triangles,
+            stats: s.stats,
+        }
+    }
+
+    /// Runs `frames` output frames (the scene's count when `None`), handing each to `sink` as it
+    /// is made and calling `progress(done, total)` after each.
+    pub fn run_into(
         &mut self,
         frames: Option<usize>,
         mut progress: impl FnMut(usize, usize),
-    ) -> RunOutput {
+        sink: &mut dyn FrameSink,
+    ) -> RunSummary {
         let frames = frames.unwrap_or(self.frames);
         let info = self.solver.info();
         let moving = self.motion.is_some();
@@ -140,8 +190,14 @@ impl Pipeline {
         };
         stats.metrics.placement_moved = self.placed_moved;
         let mut timers = Timers::default();
-        let mut out_frames = Vec::with_capacity(frames + 1);
-        out_frames.push(FrameRecord {
+        sink.begin(&RunHeader {
+            name: &self.scene.scene.name,
+            garment_triangles: &garment_triangles,
+            body_positions: &self.body_mesh.positions,
+            body_triangles: &body_triangles,
+            rig: self.body.rig().filter(|_| moving),
+        });
+        sink.frame(&FrameRecord {
             time: 0.0,
             garment: self.output_garment().to_vec(),
             pose: moving.then(|| st.pose.clone()),
@@ -215,7 +271,7 @@ impl Pipeline {
                 contacts: report.contacts,
                 retries: report.retries,
             });
-            out_frames.push(FrameRecord {
+            sink.frame(&FrameRecord {
                 time: t,
                 garment: output.clone(),
                 pose,
@@ -233,8 +289,7 @@ impl Pipeline {
             stats.metrics.length_error = Some(length_sum / length_frames.max(1) as Real);
         }
         stats.stages = timers.finish();
-        RunOutput {
-            frames: out_frames,
+        RunSummary {
             garment_triangles,
             body_triangles,
             stats,
