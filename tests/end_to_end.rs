@@ -355,7 +355,10 @@ impl WithRefine for Scene {
 #[test]
 fn the_drape_scene_file_uses_the_drape_fixtures_material() {
     let s = Scene::load(&repo().join("data/scenes/drape-sphere.toml")).unwrap();
-    let n = s.garment.particles.unwrap();
+    let tryon_pipeline::scene::GarmentSection::Square(g) = &s.garment else {
+        panic!("the drape scene's garment is a square");
+    };
+    let n = g.particles;
     let p = Pipeline::new(s).unwrap();
     let sim = tryon_pipeline::build::cloth_sim(&p.scene, &p.garment, vec![], &[]).unwrap();
     let (got, want) = (&sim.params, cloth_dyn::presets::drape(n));

@@ -20,7 +20,8 @@ commands:
   outputs save DIR | outputs compare OLD NEW
                      run every scene (and variants) into DIR; compare two such runs (GLB and
                      PNG bytes, stats.json but timings)
-  tidy               check the architecture invariants";
+  docs               regenerate docs/scenes.md (every scene key) from the schema
+  tidy               check the architecture invariants and that docs/scenes.md is current";
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -30,6 +31,7 @@ fn main() -> ExitCode {
         Some("drape") => drape::run(&args[1..]),
         Some("tidy") => tidy::run(),
         Some("outputs") => outputs::run(&args[1..]),
+        Some("docs") => tidy::write_scene_docs(),
         Some("tradeoff") => tradeoff(&args[1..]),
         Some("-h" | "--help" | "help") => {
             println!("{USAGE}");

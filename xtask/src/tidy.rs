@@ -3,7 +3,8 @@
 //! - only tryon-cli and xtask print or use anyhow;
 //! - every Rust source file opens with a `//!` line saying what it is for, and has at most
 //!   600 lines;
-//! - no to-do or unimplemented macros, debug-print macros or ignored tests in the tree.
+//! - no to-do or unimplemented macros, debug-print macros or ignored tests in the tree;
+//! - docs/scenes.md is what the scene schema generates (`cargo xtask docs` rewrites it).
 
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -18,6 +19,21 @@ const STAGES: &[&str] = &[
     "garment-fit",
 ];
 const MAY_PRINT: &[&str] = &["tryon-cli", "tryon-tradeoff", "xtask"];
+/// The scene reference generated from the schema.
+const SCENE_DOCS: &str = "docs/scenes.md";
+
+/// Rewrites docs/scenes.md from the scene schema.
+pub fn write_scene_docs() -> Result<(), String> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .ok_or("xtask has no parent folder")?;
+    let path = root.join(SCENE_DOCS);
+    tryon_io::write_atomic(&path, tryon_pipeline::scene::docs::markdown().as_bytes())
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+    eprintln!("xtask: wrote {}", path.display());
+    Ok(())
+}
+
 /// Longest a source file may be (lines).
 const MAX_LINES: usize = 600;
 
@@ -67,6 +83,13 @@ pub fn run() -> Result<(), String> {
         for file in rust_files(&root.join(extra)) {
             check_file(&file, true, &mut problems);
         }
+    }
+    let docs = root.join(SCENE_DOCS);
+    if fs::read_to_string(&docs).ok().as_deref() != Some(&tryon_pipeline::scene::docs::markdown()) {
+        problems.push(format!(
+            "{}: not what the scene schema generates; run `cargo xtask docs`",
+            docs.display()
+        ));
     }
     if problems.is_empty() {
         eprintln!("xtask: tidy: architecture invariants hold");

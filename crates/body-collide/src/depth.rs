@@ -63,6 +63,9 @@ struct Hit {
 }
 
 impl DepthMapCollider {
+    /// Pixels along the body's longest side unless a scene says otherwise.
+    pub const DEFAULT_RESOLUTION: usize = 256;
+
     /// Six views of `resolution` pixels along the body's longest side.
     pub fn new(mesh: &PolyMesh, thickness: Real, resolution: usize) -> Result<Self, BodyError> {
         let mut views: [View; 6] = Default::default();

@@ -43,6 +43,9 @@ pub struct SdfCollider {
 }
 
 impl SdfCollider {
+    /// Cells along the body's longest side unless a scene says otherwise.
+    pub const DEFAULT_RESOLUTION: usize = 64;
+
     /// A grid of `resolution` cells along the body's longest side.
     pub fn new(mesh: &PolyMesh, thickness: Real, resolution: usize) -> Result<Self, BodyError> {
         let mut c = SdfCollider {

@@ -61,6 +61,9 @@ pub struct Girths {
 }
 
 /// A MakeHuman body in metres, standing on y = 0, facing +Z, in MakeHuman's A-pose.
+/// The gender value that leaves the base mesh as it is (0 female ..= 1 male).
+pub const NEUTRAL_GENDER: Real = 0.5;
+
 #[derive(Clone, Debug)]
 pub struct MakeHumanBody {
     /// Every base vertex (body and helpers), morphed.

@@ -5,6 +5,39 @@ use crate::params::ClothParams;
 use tryon_core::math::Real;
 use tryon_core::mesh::PolyMesh;
 
+/// Distance a garment keeps from the body unless a scene says otherwise (m).
+pub const THICKNESS: Real = 0.004;
+
+/// Area density of a garment unless a scene says otherwise (kg/m^2).
+pub const DENSITY: Real = 0.2;
+
+/// What a scene's cloth meets unless the scene says otherwise: gravity on, still air, friction
+/// 0.5 at body contacts, velocity damping 0.2 /s.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Environment {
+    pub gravity: bool,
+    /// Air drag coefficient (N s/m^3 per unit area).
+    pub air_drag: Real,
+    /// Wind velocity (m/s).
+    pub wind: [Real; 3],
+    /// Coulomb friction coefficient at body contacts.
+    pub friction: Real,
+    /// Velocity damping (1/s).
+    pub velocity_damping: Real,
+}
+
+impl Default for Environment {
+    fn default() -> Self {
+        Environment {
+            gravity: true,
+            air_drag: 0.0,
+            wind: [0.0; 3],
+            friction: 0.5,
+            velocity_damping: 0.2,
+        }
+    }
+}
+
 /// Default material for a garment whose edges average `h` metres (P1's springs with flexion springs
 /// and the bending limit): the springs scale with particle mass, so an explicit integrator's
 /// stable step does not depend on the resolution; inextensibility comes from the strain limit.

@@ -39,6 +39,10 @@ pub fn boundary_loops(mesh: &PolyMesh) -> Result<Vec<Vec<u32>>, TopologyError> {
     Ok(loops)
 }
 
+/// How close to the body a modelled garment's border loops must lie to grip it as elastic bands
+/// unless a scene says otherwise (m); patterns have none.
+pub const MODELLED_BAND_GAP: Real = 0.006;
+
 /// The loops that are bands: at least `min_len` vertices, and 90% of them within `max_gap` of the
 /// body (`gap(v)` is vertex v's distance outside the body). Returns the band vertices, ascending.
 pub fn select_bands(

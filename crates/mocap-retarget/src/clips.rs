@@ -238,6 +238,9 @@ pub struct ArmRaise {
 }
 
 impl ArmRaise {
+    /// How far the arms rise unless a scene says otherwise (degrees from the rest pose).
+    pub const DEFAULT_DEG: Real = 100.0;
+
     pub fn new(skeleton: &Skeleton, raise_deg: Real) -> Result<Self, ClipError> {
         if !(raise_deg.is_finite() && (0.0..=150.0).contains(&raise_deg)) {
             return Err(ClipError::BadParameter {

@@ -5,7 +5,7 @@
 use crate::build;
 pub use crate::build::AssembleError;
 use crate::pipeline::Pipeline;
-use crate::scene::{CollisionMethod, GarmentKind, Scene};
+use crate::scene::{CollisionMethod, GarmentSection, Scene};
 use body_collide::{Bands, BodyFollower, BodyMesh, ExactCollider, FollowParams};
 use cloth_dyn::Handle;
 use tryon_core::frames::FineSurface;
@@ -18,7 +18,7 @@ impl Pipeline {
     /// Builds every enabled stage of `scene`.
     pub fn new(scene: Scene) -> Result<Pipeline, AssembleError> {
         let fx = scene.effects.clone();
-        let thickness = scene.cloth.thickness.unwrap_or(0.004);
+        let thickness = scene.cloth.thickness;
         let body = build::body(&scene)?;
         let moving = body.motion.is_some();
         let collides = fx.body_collision != CollisionMethod::None;
@@ -31,7 +31,7 @@ impl Pipeline {
             0
         };
         // Small separate pieces of a real garment ride on the piece beneath them.
-        let attachments = if scene.garment.kind == GarmentKind::Mhclo {
+        let attachments = if matches!(scene.garment, GarmentSection::Mhclo(_)) {
             garment_fit::attach_small_pieces(&garment, 0.1, 0.03)
         } else {
             Vec::new()
@@ -66,12 +66,18 @@ impl Pipeline {
             None
         };
         let surface_stages = surface_stages(&scene, &garment, &body.mesh)?;
-        let grab = scene.garment.grab.as_ref().map(|path| Grab {
-            path: path
-                .iter()
-                .map(|k| (k[0], Vec3::new(k[1], k[2], k[3])))
-                .collect(),
-        });
+        let grab = match &scene.garment {
+            GarmentSection::Square(g) => g.grab.as_ref().map(|path| Grab {
+                path: path
+                    .iter()
+                    .filter_map(|k| match k[..] {
+                        [t, x, y, z] => Some((t, Vec3::new(x, y, z))),
+                        _ => None,
+                    })
+                    .collect(),
+            }),
+            _ => None,
+        };
         let fps = scene.scene.fps;
         let duration = scene
             .scene
@@ -111,13 +117,12 @@ fn bands(
     referee: &ExactCollider,
     attachments: &[garment_fit::Attachment],
 ) -> Result<Option<Bands>, AssembleError> {
-    let g = &scene.garment;
-    let default_gap = if g.kind == GarmentKind::Mhclo {
-        0.006
-    } else {
-        0.0
+    let band_gap = match &scene.garment {
+        GarmentSection::Dress(g) => g.band_gap,
+        GarmentSection::Skirt(g) => g.band_gap,
+        GarmentSection::Mhclo(g) => g.band_gap,
+        GarmentSection::Square(_) => 0.0,
     };
-    let band_gap = g.band_gap.unwrap_or(default_gap);
     if !(band_gap > 0.0) {
         return Ok(None);
     }

@@ -3,8 +3,8 @@
 
 use crate::real;
 use crate::scene::{
-    BodyKind, CollisionMethod, EffectsSection, GarmentKind, IntegratorName, MaterialName,
-    MotionKind, Scene,
+    BodySection, CollisionMethod, EffectsSection, GarmentSection, IntegratorName, MannequinBody,
+    MaterialName, MotionSection, ObjectBody, Scene,
 };
 use body_collide::{
     BodyError, DepthMapCollider, ExactCollider, NearestVertexCollider, SdfCollider,
@@ -75,22 +75,23 @@ fn fixed(mesh: PolyMesh, clip_len: Real) -> BuiltBody {
 
 /// The scene's body and the motion driving it.
 pub(crate) fn body(scene: &Scene) -> Result<BuiltBody, AssembleError> {
-    let mo = &scene.motion;
-    Ok(match scene.body.kind {
-        BodyKind::Sphere => {
-            let r = scene.body.radius.unwrap_or(0.3);
-            let mesh = icosphere(r, scene.body.subdivisions.unwrap_or(4), Vec3::zeros());
-            fixed(mesh, mo.duration.unwrap_or(2.0))
+    let still = match &scene.motion {
+        MotionSection::Still(s) => s.duration,
+        _ => None,
+    };
+    Ok(match &scene.body {
+        BodySection::Sphere(s) => {
+            let mesh = icosphere(s.radius, s.subdivisions, Vec3::zeros());
+            fixed(mesh, still.unwrap_or(2.0))
         }
-        BodyKind::Object => fixed(object_on_table(scene)?, mo.duration.unwrap_or(3.0)),
-        BodyKind::Mannequin => mannequin(scene)?,
-        BodyKind::Makehuman => {
-            let b = real::makehuman_body(scene)?;
+        BodySection::Object(o) => fixed(object_on_table(scene, o)?, still.unwrap_or(3.0)),
+        BodySection::Mannequin(m) => mannequin(scene, m)?,
+        BodySection::Makehuman(spec) => {
+            let b = real::makehuman_body(scene, spec)?;
             let mesh = b.mesh();
-            let mut built = if mo.kind == MotionKind::Bvh {
+            let mut built = if let MotionSection::Bvh(bvh) = &scene.motion {
                 let tips = b.joint_tails.iter().map(|t| Some(*t)).collect();
-                let file = mo.file.as_deref().unwrap_or_default();
-                let r = real::bvh_motion(scene, file, &b.skeleton, &b.joint_rest, tips)?;
+                let r = real::bvh_motion(scene, bvh, &b.skeleton, &b.joint_rest, tips)?;
                 BuiltBody {
                     clip_len: r.duration(),
                     model: Box::new(b.skinned()),
@@ -99,7 +100,7 @@ pub(crate) fn body(scene: &Scene) -> Result<BuiltBody, AssembleError> {
                     makehuman: None,
                 }
             } else {
-                fixed(mesh, mo.duration.unwrap_or(2.0))
+                fixed(mesh, still.unwrap_or(2.0))
             };
             built.makehuman = Some(b);
             built
@@ -108,35 +109,29 @@ pub(crate) fn body(scene: &Scene) -> Result<BuiltBody, AssembleError> {
 }
 
 /// The parametric mannequin and its motion.
-fn mannequin(scene: &Scene) -> Result<BuiltBody, AssembleError> {
-    let m = scene.measurements();
+fn mannequin(scene: &Scene, spec: &MannequinBody) -> Result<BuiltBody, AssembleError> {
+    let m = spec.measurements();
     let man = Mannequin::new(&m)?;
-    let mo = &scene.motion;
-    let motion: Box<dyn MotionSource> = match mo.kind {
-        MotionKind::Still => {
-            return Ok(fixed(man.mesh, mo.duration.unwrap_or(2.0)));
+    let motion: Box<dyn MotionSource> = match &scene.motion {
+        MotionSection::Still(s) => {
+            return Ok(fixed(man.mesh, s.duration.unwrap_or(2.0)));
         }
-        MotionKind::Walk => {
-            let d = WalkParams::default();
-            Box::new(Walk::new(
-                &man.skeleton,
-                WalkParams {
-                    period: mo.period.unwrap_or(d.period),
-                    hip_deg: mo.hip_deg.unwrap_or(d.hip_deg),
-                    knee_deg: mo.knee_deg.unwrap_or(d.knee_deg),
-                    arm_deg: mo.arm_deg.unwrap_or(d.arm_deg),
-                    duration: mo.duration.unwrap_or(d.duration),
-                    leg_length: man.landmarks.crotch + 0.06 * m.scale(),
-                    ..d
-                },
-            )?)
-        }
-        MotionKind::ArmRaise => {
-            Box::new(ArmRaise::new(&man.skeleton, mo.raise_deg.unwrap_or(100.0))?)
-        }
-        MotionKind::Bvh => Box::new(real::bvh_motion(
+        MotionSection::Walk(w) => Box::new(Walk::new(
+            &man.skeleton,
+            WalkParams {
+                period: w.period,
+                hip_deg: w.hip_deg,
+                knee_deg: w.knee_deg,
+                arm_deg: w.arm_deg,
+                duration: w.duration,
+                leg_length: man.landmarks.crotch + 0.06 * m.scale(),
+                ..WalkParams::default()
+            },
+        )?),
+        MotionSection::ArmRaise(a) => Box::new(ArmRaise::new(&man.skeleton, a.raise_deg)?),
+        MotionSection::Bvh(bvh) => Box::new(real::bvh_motion(
             scene,
-            mo.file.as_deref().unwrap_or_default(),
+            bvh,
             &man.skeleton,
             &man.joint_rest,
             vec![None; man.joint_rest.len()],
@@ -165,40 +160,37 @@ pub fn garment(
     scene: &Scene,
     makehuman: Option<&body_model::MakeHumanBody>,
 ) -> Result<PolyMesh, AssembleError> {
-    let m = scene.measurements();
-    let g = &scene.garment;
-    Ok(match g.kind {
-        GarmentKind::Dress => {
-            let d = DressParams::default();
-            let e = g.ease.clone().unwrap_or(d.ease.to_vec());
+    let m = match &scene.body {
+        BodySection::Mannequin(b) => b.measurements(),
+        _ => tryon_core::measure::Measurements::default(),
+    };
+    Ok(match &scene.garment {
+        GarmentSection::Dress(g) => {
             let p = DressParams {
-                ease: [e[0], e[1], e[2]],
-                flare: g.flare.unwrap_or(d.flare),
-                hem_above_knee: g.hem_above_knee.unwrap_or(d.hem_above_knee),
-                columns: g.columns.unwrap_or(d.columns),
-                row_spacing: g.row_spacing.unwrap_or(d.row_spacing),
+                ease: [g.ease[0], g.ease[1], g.ease[2]],
+                flare: g.flare,
+                hem_above_knee: g.hem_above_knee,
+                columns: g.columns,
+                row_spacing: g.row_spacing,
             };
             garment_fit::dress(&m, &p)?.mesh
         }
-        GarmentKind::Skirt => {
-            let d = SkirtParams::default();
-            let e = g.ease.clone().unwrap_or(d.ease.to_vec());
+        GarmentSection::Skirt(g) => {
             let p = SkirtParams {
-                ease: [e[0], e[1]],
-                flare: g.flare.unwrap_or(d.flare),
-                hem_above_knee: g.hem_above_knee.unwrap_or(d.hem_above_knee),
-                columns: g.columns.unwrap_or(d.columns),
-                row_spacing: g.row_spacing.unwrap_or(d.row_spacing),
+                ease: [g.ease[0], g.ease[1]],
+                flare: g.flare,
+                hem_above_knee: g.hem_above_knee,
+                columns: g.columns,
+                row_spacing: g.row_spacing,
             };
             garment_fit::skirt(&m, &p)?.mesh
         }
-        GarmentKind::Square => {
-            let n = g.particles.unwrap_or(32).max(2) - 1;
-            let size = g.size.unwrap_or(1.0);
-            grid_xz(n, n, size, size, g.drop_height.unwrap_or(0.5))
+        GarmentSection::Square(g) => {
+            let n = g.particles.max(2) - 1;
+            grid_xz(n, n, g.size, g.size, g.drop_height)
         }
-        GarmentKind::Mhclo => {
-            let (binding, obj) = real::mhclo(scene, g.file.as_deref().unwrap_or_default())?;
+        GarmentSection::Mhclo(g) => {
+            let (binding, obj) = real::mhclo(scene, &g.file)?;
             let rest = makehuman.map(|b| b.rest.as_slice()).unwrap_or(&[]);
             let fitted = garment_fit::fit_garment(&binding, &obj, rest)
                 .map_err(|e| AssembleError::Asset(e.into()))?;
@@ -215,17 +207,16 @@ pub fn garment(
 
 /// The cloth's material: the preset for the garment's resolution, then the scene's values.
 pub fn cloth_params(scene: &Scene, garment: &PolyMesh) -> Result<ClothParams, AssembleError> {
-    let (c, g, fx) = (&scene.cloth, &scene.garment, &scene.effects);
-    let density = c.density.unwrap_or(0.2);
-    let mut p = match c.material.unwrap_or_default() {
-        MaterialName::Garment => presets::garment(presets::mean_edge(garment), density),
+    let (c, fx) = (&scene.cloth, &scene.effects);
+    let density = c.density;
+    let mut p = match (c.material, &scene.garment) {
         // The grid's spacing (the mean triangle edge counts the quads' diagonals).
-        MaterialName::Sheet => {
-            let n = g.particles.unwrap_or(32).max(2) - 1;
-            presets::sheet(g.size.unwrap_or(1.0) / n as Real, density)
+        (MaterialName::Sheet, GarmentSection::Square(g)) => {
+            presets::sheet(g.size / (g.particles.max(2) - 1) as Real, density)
         }
+        _ => presets::garment(presets::mean_edge(garment), density),
     };
-    if g.kind == GarmentKind::Mhclo {
+    if matches!(scene.garment, GarmentSection::Mhclo(_)) {
         p = presets::modelled(p);
     }
     let set = |dst: &mut Real, v: Option<Real>| {
@@ -254,7 +245,8 @@ pub fn cloth_params(scene: &Scene, garment: &PolyMesh) -> Result<ClothParams, As
         Vec3::zeros()
     };
     p.air_drag = fx.air_drag;
-    p.wind = Vec3::from(fx.wind);
+    let wind = |i: usize| fx.wind.get(i).copied().unwrap_or(0.0);
+    p.wind = Vec3::new(wind(0), wind(1), wind(2));
     p.friction = fx.friction;
     p.velocity_damping = fx.velocity_damping;
     p.validate()?;
@@ -270,7 +262,7 @@ pub fn cloth_sim(
     kinematic: &[u32],
 ) -> Result<ClothSim, AssembleError> {
     let p = cloth_params(scene, garment)?;
-    let kind = match scene.cloth.integrator.unwrap_or(IntegratorName::Rk4) {
+    let kind = match scene.cloth.integrator {
         IntegratorName::Rk4 => IntegratorKind::Rk4,
         IntegratorName::SymplecticEuler => IntegratorKind::SymplecticEuler,
         IntegratorName::ImplicitEuler => IntegratorKind::ImplicitEuler,
@@ -300,11 +292,10 @@ pub fn collider(
 
 /// P4's scene body: the scene's OBJ scaled to metres, centred over the origin and standing on a
 /// closed table slab whose top is y = 0.
-fn object_on_table(scene: &Scene) -> Result<PolyMesh, AssembleError> {
-    let b = &scene.body;
-    let path = real::resolve(scene, "body.file", b.file.as_deref().unwrap_or_default())?;
+fn object_on_table(scene: &Scene, b: &ObjectBody) -> Result<PolyMesh, AssembleError> {
+    let path = real::resolve(scene, "body.file", &b.file)?;
     let obj = tryon_io::read_obj(&path).map_err(real::AssetError::from)?;
-    let scale = b.scale.unwrap_or(1.0);
+    let scale = b.scale;
     let mut mesh = PolyMesh {
         positions: obj.positions.iter().map(|p| p * scale).collect(),
         faces: obj.faces,
@@ -321,7 +312,7 @@ fn object_on_table(scene: &Scene) -> Result<PolyMesh, AssembleError> {
     for p in &mut mesh.positions {
         *p += shift;
     }
-    let side = b.table.unwrap_or(1.5);
+    let side = b.table;
     if side > 0.0 {
         let cells = ((side / 0.03).ceil() as usize).clamp(2, 200);
         let slab = table_slab(side, 0.04, cells);

@@ -2,7 +2,7 @@
 //! (`TRYON_DATA`), the MakeHuman body with measurements filled from the raw base, .mhclo garments
 //! fitted onto it, and BVH clips retargeted onto the body's skeleton.
 
-use crate::scene::{RigName, Scene};
+use crate::scene::{BvhSpec, MakeHumanSpec, RigName, Scene};
 use body_model::{MakeHumanBody, MakeHumanError};
 use mocap_retarget::{Placement, RetargetError, RetargetOptions, Retargeted, Rig, retarget};
 use std::path::{Path, PathBuf};
@@ -88,20 +88,19 @@ pub fn resolve(scene: &Scene, key: &'static str, value: &str) -> Result<PathBuf,
 }
 
 /// The MakeHuman body of a scene; measurements not given keep the raw base's.
-pub fn makehuman_body(scene: &Scene) -> Result<MakeHumanBody, AssetError> {
+pub fn makehuman_body(scene: &Scene, b: &MakeHumanSpec) -> Result<MakeHumanBody, AssetError> {
     let data = resolve(scene, "body.kind", "makehuman/base.obj")?
         .parent()
         .and_then(Path::parent)
         .map(Path::to_path_buf)
         .unwrap_or_default();
-    let rig = match scene.body.rig.unwrap_or(RigName::CmuMb) {
+    let rig = match b.rig {
         RigName::CmuMb => MhRig::CmuMb,
         RigName::Default => MhRig::Default,
     };
     let assets = tryon_io::load_makehuman(&data, rig)?;
-    let gender = scene.body.gender.unwrap_or(0.5);
+    let gender = b.gender;
     let raw = MakeHumanBody::build(&assets, gender, None)?;
-    let b = &scene.body;
     if [b.height, b.bust, b.waist, b.hip]
         .iter()
         .all(Option::is_none)
@@ -115,9 +114,9 @@ pub fn makehuman_body(scene: &Scene) -> Result<MakeHumanBody, AssetError> {
         bust: b.bust.unwrap_or(g.bust),
         waist: b.waist.unwrap_or(g.waist),
         hip: b.hip.unwrap_or(g.hip),
-        shoulder_width: b.shoulder_width.unwrap_or(d.shoulder_width),
-        arm_length: b.arm_length.unwrap_or(d.arm_length),
-        inseam: b.inseam.unwrap_or(d.inseam),
+        shoulder_width: d.shoulder_width,
+        arm_length: d.arm_length,
+        inseam: d.inseam,
     };
     Ok(MakeHumanBody::build(&assets, gender, Some(&m))?)
 }
@@ -142,21 +141,20 @@ pub fn mhclo(
 /// Reads a BVH clip and retargets it onto a skeleton at the scene's frame rate.
 pub fn bvh_motion(
     scene: &Scene,
-    file: &str,
+    m: &BvhSpec,
     skeleton: &Skeleton,
     joint_rest: &[Vec3],
     tips: Vec<Option<Vec3>>,
 ) -> Result<Retargeted, AssetError> {
-    let path = resolve(scene, "motion.file", file)?;
-    let clip = tryon_io::read_bvh(&path, scene.motion.unit)?;
+    let path = resolve(scene, "motion.file", &m.file)?;
+    let clip = tryon_io::read_bvh(&path, m.unit)?;
     let rig = Rig::new(skeleton.clone(), joint_rest.to_vec(), tips);
-    let m = &scene.motion;
     let opt = RetargetOptions {
         fps: scene.scene.fps,
         placement: Placement::StartAtTarget,
-        start: m.start.unwrap_or(0.0),
+        start: m.start,
         duration: m.duration,
-        ease_in: m.ease_in.unwrap_or(0.5),
+        ease_in: m.ease_in,
         skip_synthetic: true,
     };
     Ok(retarget(&clip, &rig, &opt)?)

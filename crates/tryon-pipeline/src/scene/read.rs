@@ -1,0 +1,188 @@
+//! Reading a scene document with every key's position kept: each table is deserialized from the
+//! parsed document itself, so an error points at the offending key or value; a table with a
+//! `kind` is read as the variant the kind names, which owns its keys.
+
+use super::{Scene, SceneError, line_col};
+use serde::de::DeserializeOwned;
+use std::path::Path;
+use toml::Spanned;
+use toml::de::{DeString, DeTable, DeValue, Deserializer};
+
+/// The tables a scene may have.
+const TABLES: [&str; 7] = [
+    "scene", "body", "garment", "motion", "cloth", "effects", "output",
+];
+
+/// A deserialization error at its place in `text`, with the key named when the message does not.
+fn located(e: toml::de::Error, text: &str, file: &Path, table: &str) -> SceneError {
+    let (line, column) = e.span().map_or((0, 0), |s| line_col(text, s.start));
+    let mut message = e.message().to_string();
+    let key = text
+        .lines()
+        .nth(line.wrapping_sub(1))
+        .and_then(|l| l.split_once('='))
+        .map(|(k, _)| k.trim().to_string())
+        .filter(|k| !k.is_empty() && !k.starts_with('['));
+    if let Some(k) = key {
+        message = format!("`{table}.{k}`: {message}");
+        // A key of another kind of this table: say which kinds take it.
+        let owners: Vec<String> = super::docs::keys()
+            .into_iter()
+            .filter(|x| x.table == table && x.name == k)
+            .filter_map(|x| x.kind.map(|kind| format!("kind = \"{kind}\"")))
+            .collect();
+        if message.contains("unknown field") && !owners.is_empty() {
+            message = format!("{message} (only {} takes it)", owners.join(" or "));
+        }
+    }
+    SceneError::Syntax {
+        file: file.to_path_buf(),
+        line,
+        column,
+        message,
+    }
+}
+
+fn invalid(
+    text: &str,
+    file: &Path,
+    at: usize,
+    key: &str,
+    value: String,
+    expected: String,
+) -> SceneError {
+    SceneError::Invalid {
+        file: file.to_path_buf(),
+        line: Some(line_col(text, at).0),
+        key: key.to_string(),
+        value,
+        expected,
+    }
+}
+
+/// A plain table.
+fn plain<T: DeserializeOwned>(
+    text: &str,
+    file: &Path,
+    name: &str,
+    value: Spanned<DeValue<'_>>,
+) -> Result<T, SceneError> {
+    let span = value.span();
+    let DeValue::Table(table) = value.into_inner() else {
+        return Err(invalid(
+            text,
+            file,
+            span.start,
+            name,
+            "a value".into(),
+            format!("a [{name}] table"),
+        ));
+    };
+    T::deserialize(Deserializer::from(Spanned::new(span, table)))
+        .map_err(|e| located(e, text, file, name))
+}
+
+/// A table whose `kind` names the variant of `T` that reads the rest of it.
+fn tagged<T: DeserializeOwned + schemars::JsonSchema>(
+    text: &str,
+    file: &Path,
+    name: &str,
+    value: Spanned<DeValue<'_>>,
+) -> Result<T, SceneError> {
+    let span = value.span();
+    let kinds = super::docs::variant_names::<T>()
+        .iter()
+        .map(|k| format!("\"{k}\""))
+        .collect::<Vec<_>>()
+        .join(", ");
+    let DeValue::Table(mut table) = value.into_inner() else {
+        return Err(invalid(
+            text,
+            file,
+            span.start,
+            name,
+            "a value".into(),
+            format!("a [{name}] table"),
+        ));
+    };
+    let key = table.keys().find(|k| k.get_ref() == "kind").cloned();
+    let Some(kind) = key.and_then(|k| table.remove(&k)) else {
+        return Err(invalid(
+            text,
+            file,
+            span.start,
+            &format!("{name}.kind"),
+            "nothing".into(),
+            format!("one of {kinds}"),
+        ));
+    };
+    let kind_span = kind.span();
+    let DeValue::String(kind) = kind.into_inner() else {
+        return Err(invalid(
+            text,
+            file,
+            kind_span.start,
+            &format!("{name}.kind"),
+            "a value".into(),
+            format!("one of {kinds}"),
+        ));
+    };
+    let mut outer = DeTable::default();
+    outer.insert(
+        Spanned::new(kind_span, kind),
+        Spanned::new(span.clone(), DeValue::Table(table)),
+    );
+    T::deserialize(Deserializer::from(Spanned::new(span, outer)))
+        .map_err(|e| located(e, text, file, name))
+}
+
+/// Reads a scene (not yet checked).
+pub(super) fn scene(text: &str, file: &Path) -> Result<Scene, SceneError> {
+    let doc = DeTable::parse(text).map_err(|e| located(e, text, file, ""))?;
+    let mut s = Scene {
+        scene: Default::default(),
+        body: super::BodySection::Sphere(Default::default()),
+        garment: super::GarmentSection::Square(Default::default()),
+        motion: Default::default(),
+        cloth: Default::default(),
+        effects: Default::default(),
+        output: Default::default(),
+        source: None,
+    };
+    let (mut body, mut garment) = (false, false);
+    for (key, value) in doc.into_inner() {
+        let name: &DeString = key.get_ref();
+        match name.as_ref() {
+            "scene" => s.scene = plain(text, file, "scene", value)?,
+            "body" => (s.body, body) = (tagged(text, file, "body", value)?, true),
+            "garment" => (s.garment, garment) = (tagged(text, file, "garment", value)?, true),
+            "motion" => s.motion = tagged(text, file, "motion", value)?,
+            "cloth" => s.cloth = plain(text, file, "cloth", value)?,
+            "effects" => s.effects = plain(text, file, "effects", value)?,
+            "output" => s.output = plain(text, file, "output", value)?,
+            other => {
+                let tables = TABLES.map(|t| format!("[{t}]")).join(", ");
+                return Err(invalid(
+                    text,
+                    file,
+                    key.span().start,
+                    other,
+                    "a table".into(),
+                    format!("one of the tables {tables}"),
+                ));
+            }
+        }
+    }
+    for (given, name) in [(body, "body"), (garment, "garment")] {
+        if !given {
+            return Err(SceneError::Invalid {
+                file: file.to_path_buf(),
+                line: None,
+                key: name.into(),
+                value: "nothing".into(),
+                expected: format!("a [{name}] table with a kind"),
+            });
+        }
+    }
+    Ok(s)
+}

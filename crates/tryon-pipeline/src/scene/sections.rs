@@ -1,0 +1,223 @@
+//! The flat tables of the scene schema: `[cloth]` (overrides of the material preset), `[effects]`
+//! (what acts, and the surface detail's parameters) and `[output]`.
+
+use super::schema::{IntegratorName, MaterialName};
+use cloth_dyn::presets::{self, Environment};
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+use tryon_core::math::Real;
+
+/// Cloth material and solver settings; absent values take the material preset's, scaled to the
+/// garment's resolution.
+#[derive(Clone, Debug, Deserialize, Serialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct ClothSection {
+    /// The coarse cloth's integrator.
+    pub integrator: IntegratorName,
+    /// The material preset.
+    pub material: MaterialName,
+    /// Largest substep (s); the preset's stability bound when absent.
+    #[schemars(range(min = 1e-5, max = 0.1))]
+    pub substep: Option<Real>,
+    /// Area density (kg/m^2).
+    #[schemars(range(min = 1e-3, max = 10.0))]
+    pub density: Real,
+    /// Stretch stiffness (N/m per unit strain) for the whole garment.
+    #[schemars(range(min = 0.0, max = 1e9))]
+    pub k_stretch: Option<Real>,
+    /// Compression stiffness (N/m), P1's soft side of eq. 1.
+    #[schemars(range(min = 0.0, max = 1e9))]
+    pub k_compress: Option<Real>,
+    /// Shear stiffness (N/m).
+    #[schemars(range(min = 0.0, max = 1e9))]
+    pub k_shear: Option<Real>,
+    /// Bending (flexion spring) stiffness (N/m).
+    #[schemars(range(min = 0.0, max = 1e9))]
+    pub k_bend: Option<Real>,
+    /// Spring damping (N s/m).
+    #[schemars(range(min = 0.0, max = 1e9))]
+    pub spring_damping: Option<Real>,
+    /// Provot's strain limit, a ratio in [1, 2]; 0 turns it off.
+    pub max_strain: Option<Real>,
+    /// Passes of the strain limit per substep.
+    #[schemars(range(max = 100))]
+    pub strain_iterations: Option<u32>,
+    /// Quality guard: a substep that stretches a structural edge past this ratio of its rest
+    /// length is retried at half the step, a ratio in (1, 10]; 0 turns it off.
+    pub stretch_guard: Option<Real>,
+    /// Distance the cloth keeps from the body (m).
+    #[schemars(range(min = 0.0, max = 0.05))]
+    pub thickness: Real,
+}
+
+impl Default for ClothSection {
+    fn default() -> Self {
+        ClothSection {
+            integrator: IntegratorName::default(),
+            material: MaterialName::default(),
+            substep: None,
+            density: presets::DENSITY,
+            k_stretch: None,
+            k_compress: None,
+            k_shear: None,
+            k_bend: None,
+            spring_damping: None,
+            max_strain: None,
+            strain_iterations: None,
+            stretch_guard: None,
+            thickness: presets::THICKNESS,
+        }
+    }
+}
+
+/// A way of colliding with the body.
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, JsonSchema, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum CollisionMethod {
+    /// P1's nearest-vertex tracking.
+    NearestVertex,
+    /// Closest point on the whole mesh (parry): the referee, slow but exact.
+    Exact,
+    /// P3's signed distance grid (trilinear), rebuilt when the body moves.
+    Sdf,
+    /// P4's six-view depth and normal maps, re-rendered when the body moves.
+    DepthMaps,
+    /// No collision.
+    None,
+}
+
+impl CollisionMethod {
+    /// The name the scene file uses.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            CollisionMethod::NearestVertex => "nearest_vertex",
+            CollisionMethod::Exact => "exact",
+            CollisionMethod::Sdf => "sdf",
+            CollisionMethod::DepthMaps => "depth_maps",
+            CollisionMethod::None => "none",
+        }
+    }
+}
+
+/// Which effects act. A disabled effect is not assembled at all.
+#[derive(Clone, Debug, Deserialize, Serialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct EffectsSection {
+    /// Gravity.
+    pub gravity: bool,
+    /// Air drag coefficient (N s/m^3 per unit area); 0 turns drag off.
+    #[schemars(range(min = 0.0, max = 100.0))]
+    pub air_drag: Real,
+    /// Wind velocity (m/s); only acts through air drag.
+    #[schemars(length(equal = 3), inner(range(min = -100.0, max = 100.0)))]
+    pub wind: Vec<Real>,
+    /// Coulomb friction coefficient at body contacts; 0 turns friction off.
+    #[schemars(range(min = 0.0, max = 5.0))]
+    pub friction: Real,
+    /// How the cloth collides with the body.
+    pub body_collision: CollisionMethod,
+    /// Collider of the fine surface (P1.4.2); the body collider's method when absent (`none` is
+    /// not allowed: turn `fine_collision` off instead).
+    pub fine_collider: Option<CollisionMethod>,
+    /// Grid cells along the body's longest side for `sdf`.
+    #[schemars(range(min = 8, max = 512))]
+    pub sdf_resolution: usize,
+    /// Pixels along the body's longest side for `depth_maps`.
+    #[schemars(range(min = 16, max = 4096))]
+    pub depth_resolution: usize,
+    /// P1.3.4: carry the cloth with the moving body.
+    pub follow_body: bool,
+    /// Velocity damping (1/s); 0 turns it off.
+    #[schemars(range(min = 0.0, max = 100.0))]
+    pub velocity_damping: Real,
+    /// P1.4.1: PN-triangle refinement level, 2^level segments per coarse edge; 0 = the coarse
+    /// mesh is the output (and no surface stage runs).
+    #[schemars(range(max = 4))]
+    pub refine: u8,
+    /// P1.4.2: raise fine vertices out of the body (when refine > 0 and the body collides).
+    pub fine_collision: bool,
+    /// P1.4.3: the wrinkle model (when refine > 0).
+    pub wrinkles: bool,
+    /// P1.4.4: blend normals by wrinkle height (when refine > 0 and wrinkles or fine collision
+    /// run).
+    pub blend_normals: bool,
+    /// k_out-plane of P1 eqs. 10 and 12 (m/N).
+    #[schemars(range(min = 0.0, max = 100.0))]
+    pub k_out_plane: Real,
+    /// Height at which the deformed surface's normal takes over (m), P1 eq. 13.
+    #[schemars(range(min = 1e-5, max = 1.0))]
+    pub h_normal: Real,
+    /// Distance fine vertices keep from the body (m).
+    #[schemars(range(min = 0.0, max = 0.05))]
+    pub fine_skin: Real,
+    /// Fine vertices within this distance of the body count as touching it (m; at least
+    /// `fine_skin`).
+    #[schemars(range(min = 0.0, max = 0.2))]
+    pub fine_margin: Real,
+    /// Longest a fine edge may get through wrinkle height differences, over its reference length.
+    #[schemars(range(min = 1.0, max = 3.0))]
+    pub max_fine_stretch: Real,
+}
+
+impl Default for EffectsSection {
+    fn default() -> Self {
+        let env = Environment::default();
+        let detail = wrinkle::DetailParams::default();
+        EffectsSection {
+            gravity: env.gravity,
+            air_drag: env.air_drag,
+            wind: env.wind.to_vec(),
+            friction: env.friction,
+            body_collision: CollisionMethod::NearestVertex,
+            fine_collider: None,
+            sdf_resolution: body_collide::SdfCollider::DEFAULT_RESOLUTION,
+            depth_resolution: body_collide::DepthMapCollider::DEFAULT_RESOLUTION,
+            follow_body: true,
+            velocity_damping: env.velocity_damping,
+            refine: 0,
+            // The surface stages a refined scene gets unless it says otherwise: fine collision
+            // and blended normals on, the wrinkle model (the costly one) off.
+            fine_collision: true,
+            wrinkles: false,
+            blend_normals: true,
+            k_out_plane: detail.k_out_plane,
+            h_normal: detail.h_normal,
+            fine_skin: detail.skin,
+            fine_margin: detail.margin,
+            max_fine_stretch: detail.max_fine_stretch,
+        }
+    }
+}
+
+/// What to write.
+#[derive(Clone, Debug, Deserialize, Serialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct OutputSection {
+    /// scene.glb: the skinned body and the garment's frames as morph targets.
+    pub glb: bool,
+    /// preview.png: one frame, shaded.
+    pub preview: bool,
+    /// stats.json: counts, per-stage times, metrics, per-frame figures.
+    pub stats: bool,
+    /// Frame drawn in the preview; the last frame when absent.
+    pub preview_frame: Option<usize>,
+    /// Preview width (pixels).
+    #[schemars(range(min = 16, max = 8192))]
+    pub preview_width: u32,
+    /// Preview height (pixels).
+    #[schemars(range(min = 16, max = 8192))]
+    pub preview_height: u32,
+}
+
+impl Default for OutputSection {
+    fn default() -> Self {
+        OutputSection {
+            glb: true,
+            preview: true,
+            stats: true,
+            preview_frame: None,
+            preview_width: 800,
+            preview_height: 1000,
+        }
+    }
+}

@@ -1,0 +1,193 @@
+//! Tests of the scene schema: every key of every kind in the generated reference is checked
+//! against the range the reference gives, keys belong to their kind only, and the tagged tables
+//! read the values they are given.
+
+use super::*;
+use std::path::Path;
+
+/// A minimal scene whose `table` has kind `kind` (the other tables made to fit it), with `extra`
+/// lines added to that table.
+fn minimal(table: &str, kind: Option<&str>, extra: &str) -> String {
+    let (mut body, mut garment, mut motion) = (
+        "kind = \"mannequin\"\n".to_string(),
+        "kind = \"dress\"\n".to_string(),
+        "kind = \"still\"\n".to_string(),
+    );
+    let file = |k: &str| match k {
+        "object" => "file = \"x.obj\"\n",
+        "mhclo" => "file = \"x.mhclo\"\n",
+        "bvh" => "file = \"x.bvh\"\n",
+        _ => "",
+    };
+    match (table, kind) {
+        ("body", Some(k)) => {
+            body = format!("kind = \"{k}\"\n{}", file(k));
+            if k != "mannequin" {
+                garment = "kind = \"square\"\n".into();
+            }
+        }
+        ("garment", Some(k)) => {
+            garment = format!("kind = \"{k}\"\n{}", file(k));
+            match k {
+                "square" => body = "kind = \"sphere\"\n".into(),
+                "mhclo" => body = "kind = \"makehuman\"\n".into(),
+                _ => {}
+            }
+        }
+        ("motion", Some(k)) => motion = format!("kind = \"{k}\"\n{}", file(k)),
+        _ => {}
+    }
+    let mut tables = vec![
+        ("scene", String::new()),
+        ("body", body),
+        ("garment", garment),
+        ("motion", motion),
+        ("cloth", String::new()),
+        ("effects", String::new()),
+        ("output", String::new()),
+    ];
+    for (name, text) in &mut tables {
+        if *name == table {
+            text.push_str(extra);
+        }
+    }
+    tables.iter().map(|(n, t)| format!("[{n}]\n{t}")).collect()
+}
+
+#[test]
+fn every_minimal_scene_of_every_kind_parses() {
+    for k in docs::keys() {
+        let text = minimal(&k.table, k.kind.as_deref(), "");
+        if let Err(e) = Scene::parse(&text, Path::new("m.toml")) {
+            panic!("{}/{:?}: {e}\n{text}", k.table, k.kind);
+        }
+    }
+}
+
+#[test]
+fn every_ranged_key_refuses_values_past_its_range_and_names_itself() {
+    let mut checked = 0;
+    for k in docs::keys() {
+        let (Some(lo), Some(hi)) = (k.min, k.max) else {
+            continue;
+        };
+        let integer = k.ty == "integer";
+        let spell = |x: f64| {
+            let one = if integer {
+                format!("{}", x as i64)
+            } else {
+                format!("{x:?}")
+            };
+            match k.len {
+                Some(n) => format!("[{}]", vec![one; n].join(", ")),
+                None => one,
+            }
+        };
+        for (x, ok) in [(lo, true), (hi, true), (hi + 1.0, false), (lo - 1.0, false)] {
+            if integer && x < 0.0 {
+                continue; // an unsigned key cannot even be written below 0
+            }
+            let text = minimal(
+                &k.table,
+                k.kind.as_deref(),
+                &format!("{} = {}\n", k.name, spell(x)),
+            );
+            let got = Scene::parse(&text, Path::new("m.toml"));
+            let name = format!("{}.{}", k.table, k.name);
+            match (ok, got) {
+                (true, Err(e)) if e.to_string().contains(&name) => {
+                    // A value at the edge of its own range may still break a rule between keys
+                    // (measurements for the height, fine_margin >= fine_skin): only those.
+                    assert!(
+                        ["body.", "effects.fine_"]
+                            .iter()
+                            .any(|p| name.starts_with(p)),
+                        "{name} = {x} refused: {e}"
+                    );
+                }
+                (false, Ok(_)) => panic!("{name} = {x} accepted (allowed {})", k.allowed()),
+                (false, Err(e)) => {
+                    let e = e.to_string();
+                    assert!(
+                        e.contains(&name) && e.contains("m.toml:"),
+                        "{name} = {x}: {e}"
+                    );
+                    checked += 1;
+                }
+                _ => {}
+            }
+        }
+    }
+    assert!(checked > 60, "only {checked} out-of-range values checked");
+}
+
+#[test]
+fn a_key_of_another_kind_is_refused_and_the_kind_that_takes_it_is_named() {
+    let text = minimal("body", Some("mannequin"), "rig = \"cmu_mb\"\n");
+    let e = Scene::parse(&text, Path::new("m.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("body.rig") && e.contains("kind = \"makehuman\""),
+        "{e}"
+    );
+    let text = minimal("garment", Some("dress"), "particles = 8\n");
+    let e = Scene::parse(&text, Path::new("m.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("garment.particles") && e.contains("\"square\""),
+        "{e}"
+    );
+}
+
+#[test]
+fn tagged_tables_read_their_values_and_defaults_come_from_the_stages() {
+    let text = minimal("motion", Some("walk"), "period = 0.9\n");
+    let s = Scene::parse(&text, Path::new("m.toml")).unwrap();
+    let MotionSection::Walk(w) = &s.motion else {
+        panic!("{:?}", s.motion)
+    };
+    assert_eq!(w.period, 0.9);
+    assert_eq!(w.hip_deg, mocap_retarget::WalkParams::default().hip_deg);
+    let BodySection::Mannequin(b) = &s.body else {
+        panic!("{:?}", s.body)
+    };
+    assert_eq!(
+        b.measurements(),
+        tryon_core::measure::Measurements::default()
+    );
+    assert_eq!(s.cloth.thickness, cloth_dyn::presets::THICKNESS);
+    assert_eq!(
+        s.effects.h_normal,
+        wrinkle::DetailParams::default().h_normal
+    );
+}
+
+#[test]
+fn the_reference_lists_every_kind_and_its_keys() {
+    let md = docs::markdown();
+    for kind in [
+        "mannequin",
+        "sphere",
+        "makehuman",
+        "object",
+        "dress",
+        "skirt",
+        "square",
+        "mhclo",
+    ] {
+        assert!(md.contains(&format!("### kind = \"{kind}\"")), "{kind}");
+    }
+    for kind in ["still", "walk", "arm_raise", "bvh"] {
+        assert!(md.contains(&format!("### kind = \"{kind}\"")), "{kind}");
+    }
+    assert!(
+        md.contains("| `raise_deg` | number | `100.0` | 0..=150 |"),
+        "{md}"
+    );
+    assert_eq!(
+        docs::variant_names::<MotionSection>(),
+        ["still", "walk", "arm_raise", "bvh"]
+    );
+}
