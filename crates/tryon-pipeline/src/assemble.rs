@@ -53,7 +53,7 @@ impl Pipeline {
                 .collect()
         });
         let kinematic: Vec<u32> = attachments.iter().map(|a| a.vertex).collect();
-        let solver = build::cloth_sim(&scene, &garment, handles, &kinematic)?;
+        let solver = build::solver(&scene, &garment, handles, &kinematic)?;
         let collider = collides
             .then(|| build::collider(fx.body_collision, &body.mesh, thickness, &fx))
             .transpose()?;
@@ -84,7 +84,7 @@ impl Pipeline {
             .duration
             .unwrap_or(scene.scene.settle + body.clip_len);
         let frames = (duration * fps).round().max(1.0) as usize;
-        let cloth = tryon_core::stages::ClothSolver::initial_frame(&solver);
+        let cloth = solver.initial_frame();
         Ok(Pipeline {
             scene,
             body_mesh: body.mesh,
@@ -94,7 +94,7 @@ impl Pipeline {
             collider,
             bands,
             attachments,
-            solver: Box::new(solver),
+            solver,
             cloth,
             surface_stages,
             surface: FineSurface::default(),

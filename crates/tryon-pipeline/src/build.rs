@@ -4,7 +4,7 @@
 use crate::real;
 use crate::scene::{
     BodySection, CollisionMethod, EffectsSection, GarmentSection, IntegratorName, MannequinBody,
-    MaterialName, MotionSection, ObjectBody, Scene,
+    MaterialName, MotionSection, ObjectBody, Scene, SolverName,
 };
 use body_collide::{
     BodyError, DepthMapCollider, ExactCollider, NearestVertexCollider, SdfCollider,
@@ -20,7 +20,7 @@ use tryon_core::math::{Real, Vec3};
 use tryon_core::measure::MeasureError;
 use tryon_core::mesh::{Face, PolyMesh, grid_xz};
 use tryon_core::shapes::{icosphere, table_slab};
-use tryon_core::stages::{BodyModel, Collider, MotionSource, NoCollider, StaticBody};
+use tryon_core::stages::{BodyModel, ClothSolver, Collider, MotionSource, NoCollider, StaticBody};
 
 /// Why a scene could not be assembled (after it parsed and passed its range checks).
 #[derive(Debug, Error)]
@@ -253,7 +253,19 @@ pub fn cloth_params(scene: &Scene, garment: &PolyMesh) -> Result<ClothParams, As
     Ok(p)
 }
 
-/// The scene's cloth solver: P1's particle cloth with the scene's integrator. `handles` (the
+/// The scene's garment solver. Adding a solver is a variant of `SolverName` and its arm here.
+pub fn solver(
+    scene: &Scene,
+    garment: &PolyMesh,
+    handles: Vec<Handle>,
+    kinematic: &[u32],
+) -> Result<Box<dyn ClothSolver>, AssembleError> {
+    Ok(match scene.cloth.solver {
+        SolverName::P1 => Box::new(cloth_sim(scene, garment, handles, kinematic)?),
+    })
+}
+
+/// P1's particle cloth with the scene's integrator. `handles` (the
 /// bands, in order) are the model's first handles; `kinematic` particles are placed by others.
 pub fn cloth_sim(
     scene: &Scene,

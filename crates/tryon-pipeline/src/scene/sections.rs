@@ -12,7 +12,9 @@ use tryon_core::math::Real;
 #[derive(Clone, Debug, Deserialize, Serialize, JsonSchema, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct ClothSection {
-    /// The coarse cloth's integrator.
+    /// The garment solver.
+    pub solver: SolverName,
+    /// The coarse cloth's integrator (the `p1` solver).
     pub integrator: IntegratorName,
     /// The material preset.
     pub material: MaterialName,
@@ -53,6 +55,7 @@ pub struct ClothSection {
 impl Default for ClothSection {
     fn default() -> Self {
         ClothSection {
+            solver: SolverName::default(),
             integrator: IntegratorName::default(),
             material: MaterialName::default(),
             substep: None,
@@ -70,7 +73,18 @@ impl Default for ClothSection {
     }
 }
 
-/// A way of colliding with the body.
+/// The garment solver. Adding one: a variant here and its arm in `build::solver`.
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, JsonSchema, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum SolverName {
+    /// P1's sparse-particle cloth (cloth-dyn's `ClothSim`): springs integrated by `integrator`,
+    /// Provot's strain limit, collision and friction between substeps.
+    #[default]
+    P1,
+}
+
+/// A way of colliding with the body. Adding one: a variant here and its arm in
+/// `build::collider`.
 #[derive(Clone, Copy, Debug, Deserialize, Serialize, JsonSchema, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
 pub enum CollisionMethod {
