@@ -30,18 +30,11 @@ fn deepest(referee: &ExactCollider, x: &[Vec3]) -> Real {
 /// A body that holds still until time `at`, then stands moved by `jump` (a teleport).
 struct JumpingBody {
     rest: Vec<Vec3>,
-    triangles: Vec<[u32; 3]>,
     jump: Vec3,
     at: Real,
 }
 
 impl BodyModel for JumpingBody {
-    fn vertex_count(&self) -> usize {
-        self.rest.len()
-    }
-    fn triangles(&self) -> &[[u32; 3]] {
-        &self.triangles
-    }
     fn pose(&mut self, pose: &Pose, out: &mut BodyFrame) {
         out.time = pose.time;
         self.shape_at(pose, &mut out.positions);
@@ -67,7 +60,6 @@ fn draped_then_jumping(n: usize, frames: usize, jump: Vec3) -> (DrapeScene, Poly
     let sphere = p.body_mesh.clone();
     p.body = Box::new(JumpingBody {
         rest: sphere.positions.clone(),
-        triangles: sphere.triangulate().0,
         jump,
         at: p.frame_time(frames) + 0.5 / cfg.fps,
     });

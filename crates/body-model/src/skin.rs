@@ -141,12 +141,6 @@ impl SkinnedBody {
 }
 
 impl BodyModel for SkinnedBody {
-    fn vertex_count(&self) -> usize {
-        self.rest_positions.len()
-    }
-    fn triangles(&self) -> &[[u32; 3]] {
-        &self.triangles
-    }
     fn pose(&mut self, pose: &Pose, out: &mut BodyFrame) {
         out.time = pose.time;
         self.skin_into(pose, &mut out.positions);

@@ -19,12 +19,9 @@ pub trait MotionSource: Send {
     fn sample(&self, t: Real, out: &mut Pose);
 }
 
-/// A body that can be posed into a deformed mesh.
+/// A body that can be posed into a deformed mesh (the vertices of the rest mesh it was built from,
+/// in the same order).
 pub trait BodyModel: Send {
-    /// Number of body vertices.
-    fn vertex_count(&self) -> usize;
-    /// Triangles of the body mesh (fixed for the model's lifetime).
-    fn triangles(&self) -> &[[u32; 3]];
     /// Deforms the body into `pose`, writing positions (and velocities when it can) into `out`.
     fn pose(&mut self, pose: &Pose, out: &mut BodyFrame);
     /// The body's positions in `pose`, leaving the model's state (its velocity estimate) alone: for
@@ -246,12 +243,6 @@ pub struct StaticBody {
 }
 
 impl BodyModel for StaticBody {
-    fn vertex_count(&self) -> usize {
-        self.positions.len()
-    }
-    fn triangles(&self) -> &[[u32; 3]] {
-        &self.triangles
-    }
     fn pose(&mut self, pose: &Pose, out: &mut BodyFrame) {
         out.time = pose.time;
         out.positions.clone_from(&self.positions);
