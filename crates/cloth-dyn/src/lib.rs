@@ -17,11 +17,13 @@ pub mod params;
 pub mod presets;
 pub mod solver;
 pub mod strain;
+pub mod xpbd;
 
 pub use integrator::{Derivative, Integrator, IntegratorKind, Rk4, SymplecticEuler};
 pub use model::{BuildClothError, ClothModel, Handle, SpringKind, SpringSet};
 pub use params::ClothParams;
 pub use solver::ClothSim;
+pub use xpbd::{XpbdParams, XpbdSim};
 
 #[cfg(test)]
 mod solver_tests;

@@ -11,7 +11,8 @@ use body_collide::{
 };
 use body_model::{Mannequin, SkinnedBody};
 use cloth_dyn::{
-    BuildClothError, ClothModel, ClothParams, ClothSim, Handle, IntegratorKind, presets,
+    BuildClothError, ClothModel, ClothParams, ClothSim, Handle, IntegratorKind, XpbdParams,
+    XpbdSim, presets,
 };
 use garment_fit::{DressParams, PatternError, SkirtParams};
 use mocap_retarget::{ArmRaise, ClipError, Walk, WalkParams};
@@ -262,6 +263,19 @@ pub fn solver(
 ) -> Result<Box<dyn ClothSolver>, AssembleError> {
     Ok(match scene.cloth.solver {
         SolverName::P1 => Box::new(cloth_sim(scene, garment, handles, kinematic)?),
+        SolverName::Xpbd => {
+            let p = cloth_params(scene, garment)?;
+            let model = ClothModel::build_with_kinematic(garment, &p, handles, kinematic)?;
+            let c = &scene.cloth;
+            let x = XpbdParams {
+                substep: c.xpbd_substep,
+                iterations: c.xpbd_iterations,
+                stretch_compliance: c.stretch_compliance,
+                bend_compliance: c.bend_compliance,
+                static_friction: c.static_friction,
+            };
+            Box::new(XpbdSim::new(model, p, x))
+        }
     })
 }
 

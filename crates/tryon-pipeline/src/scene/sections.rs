@@ -50,10 +50,27 @@ pub struct ClothSection {
     /// Distance the cloth keeps from the body (m).
     #[schemars(range(min = 0.0, max = 0.05))]
     pub thickness: Real,
+    /// The `xpbd` solver's longest substep (s).
+    #[schemars(range(min = 1e-5, max = 0.1))]
+    pub xpbd_substep: Real,
+    /// The `xpbd` solver's constraint passes per substep.
+    #[schemars(range(min = 1, max = 100))]
+    pub xpbd_iterations: u32,
+    /// The `xpbd` solver's stretch compliance per unit rest length (m/N); 0 is inextensible.
+    #[schemars(range(min = 0.0, max = 1.0))]
+    pub stretch_compliance: Real,
+    /// The `xpbd` solver's bending compliance (1/(N m)): larger bends more easily.
+    #[schemars(range(min = 0.0, max = 1e9))]
+    pub bend_compliance: Real,
+    /// The `xpbd` solver's static friction at body contacts (kinetic friction is
+    /// `effects.friction`).
+    #[schemars(range(min = 0.0, max = 5.0))]
+    pub static_friction: Real,
 }
 
 impl Default for ClothSection {
     fn default() -> Self {
+        let xpbd = cloth_dyn::XpbdParams::default();
         ClothSection {
             solver: SolverName::default(),
             integrator: IntegratorName::default(),
@@ -69,6 +86,11 @@ impl Default for ClothSection {
             strain_iterations: None,
             stretch_guard: None,
             thickness: presets::THICKNESS,
+            xpbd_substep: xpbd.substep,
+            xpbd_iterations: xpbd.iterations,
+            stretch_compliance: xpbd.stretch_compliance,
+            bend_compliance: xpbd.bend_compliance,
+            static_friction: xpbd.static_friction,
         }
     }
 }
@@ -81,6 +103,9 @@ pub enum SolverName {
     /// Provot's strain limit, collision and friction between substeps.
     #[default]
     P1,
+    /// Extended position-based dynamics with small substeps (cloth-dyn's `XpbdSim`): distance
+    /// and dihedral constraints with compliance, body contact and friction inside every substep.
+    Xpbd,
 }
 
 /// A way of colliding with the body. Adding one: a variant here and its arm in

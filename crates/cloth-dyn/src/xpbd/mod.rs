@@ -1,0 +1,407 @@
+//! A contact-aware garment solver: extended position-based dynamics with many small substeps and
+//! one constraint pass each (Macklin, Storey, Lu, Terdiman, Chentanez, Jeschke and Müller 2019,
+//! "Small steps in physics simulation"). Per substep: forces move every free particle, then the
+//! distance constraints of every edge and the dihedral constraints of every interior edge are
+//! solved colour by colour, then the body pushes particles out and friction (static, then kinetic)
+//! acts on the contact's tangential motion relative to the body, and velocities are the substep's
+//! displacement. Constraints are solved in position space with a compliance, so any stiffness is
+//! stable at any step, and a sliver only gets a stiff constraint, never a smaller step. Bending
+//! pulls toward the rest shape's angles, so a modelled garment keeps its shape.
+
+pub mod constraints;
+
+use crate::model::{ClothModel, Handle};
+use crate::params::ClothParams;
+use constraints::{Edge, Hinge, colour, dihedral};
+use std::collections::HashMap;
+use std::ops::Range;
+use tryon_core::frames::{CoarseFrame, Contact, StepReport};
+use tryon_core::math::{Real, Vec3, is_finite};
+use tryon_core::stages::{ClothInfo, ClothSolver, Collider};
+
+/// The XPBD solver's own settings.
+#[derive(Clone, Debug, PartialEq)]
+pub struct XpbdParams {
+    /// Longest substep (s); a frame takes as many as it needs to keep under it.
+    pub substep: Real,
+    /// Constraint passes per substep (Macklin et al.: many substeps of one pass converge better
+    /// than few of many).
+    pub iterations: u32,
+    /// Compliance of the distance constraints, per unit of rest length (m/N): 0 is inextensible.
+    pub stretch_compliance: Real,
+    /// Compliance of the dihedral constraints (1/(N m)): larger bends more easily.
+    pub bend_compliance: Real,
+    /// Static friction: a contact sticks while its tangential slip is under this times its
+    /// normal correction.
+    pub static_friction: Real,
+}
+
+impl Default for XpbdParams {
+    fn default() -> Self {
+        XpbdParams {
+            substep: 1.0 / 600.0,
+            iterations: 1,
+            stretch_compliance: 0.0,
+            bend_compliance: 1.0,
+            static_friction: 0.6,
+        }
+    }
+}
+
+/// The XPBD garment solver over a [`ClothModel`] (masses, handles and topology are shared with
+/// P1's solver).
+#[derive(Clone, Debug)]
+pub struct XpbdSim {
+    pub model: ClothModel,
+    pub params: ClothParams,
+    pub xpbd: XpbdParams,
+    edges: Vec<Edge>,
+    edge_colours: Vec<Range<usize>>,
+    hinges: Vec<Hinge>,
+    hinge_colours: Vec<Range<usize>>,
+    prev: Vec<Vec3>,
+    backup_x: Vec<Vec3>,
+    backup_v: Vec<Vec3>,
+    elastic: Vec<Vec3>,
+    contacts: Vec<Contact>,
+}
+
+/// The unique edges of `triangles` and the interior edges' hinges (the two triangles' opposite
+/// vertices, in the first triangle's winding).
+fn edges_and_hinges(triangles: &[[u32; 3]]) -> (Vec<[u32; 2]>, Vec<[u32; 4]>) {
+    let mut first: HashMap<(u32, u32), (u32, u32, u32)> = HashMap::new();
+    let mut edges = Vec::new();
+    let mut hinges = Vec::new();
+    for t in triangles {
+        for k in 0..3 {
+            let (a, b, c) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
+            let key = (a.min(b), a.max(b));
+            match first.get(&key) {
+                None => {
+                    first.insert(key, (a, b, c));
+                    edges.push([key.0, key.1]);
+                }
+                Some(&(a0, b0, c0)) => hinges.push([a0, b0, c0, c]),
+            }
+        }
+    }
+    (edges, hinges)
+}
+
+impl XpbdSim {
+    /// A solver of `model` with `params` (environment, friction, rest scale) and `xpbd`.
+    pub fn new(model: ClothModel, params: ClothParams, xpbd: XpbdParams) -> Self {
+        let x = &model.rest_positions;
+        let (edge_list, hinge_list) = edges_and_hinges(&model.triangles);
+        let refs: Vec<&[u32]> = edge_list.iter().map(|e| &e[..]).collect();
+        let (order, edge_colours) = colour(&refs, x.len());
+        let edges = order
+            .iter()
+            .map(|&k| {
+                let [i, j] = edge_list[k as usize];
+                let rest = (x[i as usize] - x[j as usize]).norm() * params.rest_scale;
+                Edge { i, j, rest }
+            })
+            .collect();
+        let refs: Vec<&[u32]> = hinge_list.iter().map(|h| &h[..]).collect();
+        let (order, hinge_colours) = colour(&refs, x.len());
+        let hinges = order
+            .iter()
+            .map(|&k| {
+                let v = hinge_list[k as usize];
+                let p = v.map(|i| x[i as usize]);
+                let rest_angle = dihedral(p).map_or(0.0, |d| d.0);
+                Hinge { v, rest_angle }
+            })
+            .collect();
+        let n = x.len();
+        let z = vec![Vec3::zeros(); n];
+        XpbdSim {
+            model,
+            params,
+            xpbd,
+            edges,
+            edge_colours,
+            hinges,
+            hinge_colours,
+            prev: z.clone(),
+            backup_x: z.clone(),
+            backup_v: z.clone(),
+            elastic: z,
+            contacts: Vec::new(),
+        }
+    }
+
+    /// Number of colours of the distance and dihedral constraints.
+    pub fn colours(&self) -> (usize, usize) {
+        (self.edge_colours.len(), self.hinge_colours.len())
+    }
+
+    /// Forces, then the predicted positions, of one substep of length `h` ending at time `t1`.
+    fn predict(&mut self, frame: &mut CoarseFrame, t1: Real, h: Real) {
+        let p = &self.params;
+        let m = &self.model;
+        let damp = (-p.velocity_damping * h).exp();
+        for i in 0..frame.positions.len() {
+            self.prev[i] = frame.positions[i];
+            if m.inv_mass[i] == 0.0 {
+                continue;
+            }
+            let v = &mut frame.velocities[i];
+            let mut a = p.gravity;
+            if p.air_drag != 0.0 {
+                a -= (*v - p.wind) * (p.air_drag * m.area[i] * m.inv_mass[i]);
+            }
+            *v = (*v + a * h) * damp;
+            frame.positions[i] += *v * h;
+        }
+        for hd in &m.handles {
+            frame.positions[hd.particle as usize] = hd.position(t1);
+        }
+    }
+
+    /// One pass over the distance constraints, colour by colour; with `record`, their forces go
+    /// into `elastic`.
+    fn solve_edges(&mut self, x: &mut [Vec3], h: Real, record: bool) {
+        let w = &self.model.inv_mass;
+        let alpha = self.xpbd.stretch_compliance / (h * h);
+        for r in &self.edge_colours {
+            for e in &self.edges[r.clone()] {
+                let (i, j) = (e.i as usize, e.j as usize);
+                let wsum = w[i] + w[j];
+                let d = x[i] - x[j];
+                let len = d.norm();
+                if wsum == 0.0 || len < 1e-12 {
+                    continue;
+                }
+                let n = d / len;
+                let c = len - e.rest;
+                let a = alpha / e.rest.max(1e-9);
+                let dl = -c / (wsum + a);
+                x[i] += n * (w[i] * dl);
+                x[j] -= n * (w[j] * dl);
+                if record {
+                    let f = n * (dl / (h * h));
+                    self.elastic[i] += f;
+                    self.elastic[j] -= f;
+                }
+            }
+        }
+    }
+
+    /// One pass over the dihedral constraints, colour by colour.
+    fn solve_hinges(&mut self, x: &mut [Vec3], h: Real) {
+        let w = &self.model.inv_mass;
+        let alpha = self.xpbd.bend_compliance / (h * h);
+        for r in &self.hinge_colours {
+            for hg in &self.hinges[r.clone()] {
+                let v = hg.v.map(|k| k as usize);
+                let Some((angle, grad)) = dihedral(v.map(|k| x[k])) else {
+                    continue;
+                };
+                let mut c = angle - hg.rest_angle;
+                if c > std::f64::consts::PI {
+                    c -= 2.0 * std::f64::consts::PI;
+                } else if c < -std::f64::consts::PI {
+                    c += 2.0 * std::f64::consts::PI;
+                }
+                let denom: Real = (0..4).map(|k| w[v[k]] * grad[k].norm_squared()).sum();
+                if !(denom + alpha > 1e-20) {
+                    continue;
+                }
+                let dl = -c / (denom + alpha);
+                for k in 0..4 {
+                    x[v[k]] += grad[k] * (w[v[k]] * dl);
+                }
+            }
+        }
+    }
+
+    /// Friction on this substep's contacts: the tangential slip relative to the body is undone
+    /// while under `static_friction` times the normal correction, else cut by `friction` times it.
+    fn friction(&self, x: &mut [Vec3], h: Real) {
+        let (mu_s, mu_k) = (self.xpbd.static_friction, self.params.friction);
+        if mu_s == 0.0 && mu_k == 0.0 {
+            return;
+        }
+        for c in &self.contacts {
+            let i = c.point as usize;
+            if self.model.inv_mass[i] == 0.0 {
+                continue;
+            }
+            let rel = x[i] - self.prev[i] - c.body_velocity * h;
+            let slip = rel - c.normal * rel.dot(&c.normal);
+            let s = slip.norm();
+            if s <= mu_s * c.depth {
+                x[i] -= slip;
+            } else if s > 0.0 {
+                x[i] -= slip * (mu_k * c.depth / s).min(1.0);
+            }
+        }
+    }
+
+    /// One substep from `t0`; returns how many particles ended non-finite or too fast.
+    fn substep(
+        &mut self,
+        frame: &mut CoarseFrame,
+        t0: Real,
+        h: Real,
+        last: bool,
+        collider: &mut dyn Collider,
+    ) -> u32 {
+        self.predict(frame, t0 + h, h);
+        if last {
+            self.elastic.iter_mut().for_each(|f| *f = Vec3::zeros());
+        }
+        let mut x = std::mem::take(&mut frame.positions);
+        let passes = self.xpbd.iterations.max(1);
+        for pass in 0..passes {
+            self.solve_edges(&mut x, h, last && pass + 1 == passes);
+            self.solve_hinges(&mut x, h);
+        }
+        self.contacts.clear();
+        collider.resolve(&mut x, &mut self.contacts);
+        self.friction(&mut x, h);
+        frame.positions = x;
+        let max2 = self.params.max_speed * self.params.max_speed;
+        let mut bad = 0;
+        for i in 0..frame.positions.len() {
+            let v = (frame.positions[i] - self.prev[i]) / h;
+            frame.velocities[i] = v;
+            if !is_finite(&frame.positions[i]) || !(v.norm_squared() <= max2) {
+                bad += 1;
+            }
+        }
+        bad
+    }
+
+    /// Puts non-finite input particles back at rest; returns how many.
+    fn sanitize(&self, frame: &mut CoarseFrame) -> u32 {
+        let n = self.model.particle_count();
+        frame.positions.resize(n, Vec3::zeros());
+        frame.velocities.resize(n, Vec3::zeros());
+        let mut count = 0;
+        for i in 0..n {
+            if !is_finite(&frame.positions[i]) || !is_finite(&frame.velocities[i]) {
+                frame.positions[i] = self.model.rest_positions[i];
+                frame.velocities[i] = Vec3::zeros();
+                count += 1;
+            }
+        }
+        count
+    }
+
+    /// The whole frame in `n` substeps; returns the bad particles of the worst substep.
+    fn frame_in(
+        &mut self,
+        frame: &mut CoarseFrame,
+        dt: Real,
+        n: usize,
+        collider: &mut dyn Collider,
+    ) -> u32 {
+        let h = dt / n as Real;
+        let mut worst = 0;
+        for s in 0..n {
+            let bad = self.substep(frame, frame.time + s as Real * h, h, s + 1 == n, collider);
+            worst = worst.max(bad);
+        }
+        worst
+    }
+}
+
+impl ClothSolver for XpbdSim {
+    fn info(&self) -> ClothInfo {
+        let s = &self.model.springs;
+        let structural = self.model.structural.clone();
+        ClothInfo {
+            method: "xpbd",
+            nominal_substep: self.xpbd.substep,
+            particles: self.model.particle_count(),
+            springs: self.edges.len() + self.hinges.len(),
+            edges: structural.clone().map(|k| [s.i[k], s.j[k]]).collect(),
+            rest: structural.map(|k| s.rest[k]).collect(),
+            masses: self.model.mass.clone(),
+        }
+    }
+
+    fn initial_frame(&self) -> CoarseFrame {
+        let mut f = CoarseFrame::at_rest(self.model.rest_positions.clone());
+        for h in &self.model.handles {
+            f.positions[h.particle as usize] = h.position(0.0);
+        }
+        f
+    }
+
+    fn step_frame(
+        &mut self,
+        frame: &mut CoarseFrame,
+        dt: Real,
+        collider: &mut dyn Collider,
+    ) -> StepReport {
+        let mut report = StepReport::default();
+        let bad_input = self.sanitize(frame);
+        report.rollbacks += bad_input;
+        report.non_finite_events += bad_input;
+        if !(dt.is_finite() && dt > 0.0) {
+            return report;
+        }
+        self.backup_x.clone_from(&frame.positions);
+        self.backup_v.clone_from(&frame.velocities);
+        let t0 = frame.time;
+        let mut n = (dt / self.xpbd.substep).ceil().max(1.0) as usize;
+        // A frame that went bad is redone with twice the substeps, twice; then the offending
+        // particles are rolled back.
+        for attempt in 0..3 {
+            let bad = self.frame_in(frame, dt, n, collider);
+            report.substeps += n as u32;
+            report.min_substep = dt / n as Real;
+            if bad == 0 {
+                break;
+            }
+            report.non_finite_events +=
+                frame.positions.iter().filter(|p| !is_finite(p)).count() as u32;
+            if attempt == 2 {
+                for i in 0..frame.positions.len() {
+                    let (x, v) = (frame.positions[i], frame.velocities[i]);
+                    if !is_finite(&x) || !(v.norm() <= self.params.max_speed) {
+                        frame.positions[i] = self.backup_x[i];
+                        frame.velocities[i] = Vec3::zeros();
+                        report.rollbacks += 1;
+                    }
+                }
+                break;
+            }
+            report.retries += 1;
+            frame.positions.clone_from(&self.backup_x);
+            frame.velocities.clone_from(&self.backup_v);
+            frame.time = t0;
+            n *= 2;
+        }
+        frame.time = t0 + dt;
+        frame.elastic_force.clone_from(&self.elastic);
+        frame.contacts.clone_from(&self.contacts);
+        report.contacts = frame.contacts.len() as u32;
+        report
+    }
+
+    fn hold_handles(&mut self, first: usize, targets: &[Vec3]) {
+        for (h, p) in self.model.handles.iter_mut().skip(first).zip(targets) {
+            if is_finite(p) {
+                h.path.clear();
+                h.path.push((0.0, *p));
+            }
+        }
+    }
+
+    fn grab(&mut self, handle: Handle) {
+        let p = handle.particle as usize;
+        if p >= self.model.particle_count() || handle.path.is_empty() {
+            return;
+        }
+        self.model.inv_mass[p] = 0.0;
+        self.model.handles.push(handle);
+    }
+}
+
+#[cfg(test)]
+mod tests;
