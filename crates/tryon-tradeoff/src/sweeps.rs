@@ -11,10 +11,6 @@ use tryon_core::math::{Real, Vec3, vertex_normals};
 use tryon_pipeline::run::Timers;
 use tryon_pipeline::{Pipeline, Scene, Stats};
 
-mod report;
-
-pub use report::run_all;
-
 /// The stages that make up the surface (P1 section 4).
 const SURFACE_STAGES: &[&str] = &["refine", "wrinkle", "fine_collision", "normals"];
 
@@ -27,6 +23,11 @@ macro_rules! logln {
         $log.push('\n');
     }};
 }
+
+mod report;
+mod solvers;
+
+pub use report::run_all;
 
 fn scenes_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/scenes")

@@ -71,6 +71,7 @@ pub fn run_all(quick: bool, out: &Path, summary: Option<&Path>) -> Result<(), St
     let wrinkles = wrinkle_sweep(quick, &mut log)?;
     let spot = spot_sweep(quick, &mut log)?;
     let guard = guard_sweep(quick, &mut log)?;
+    let solvers = super::solvers::solver_sweep(quick, &mut log)?;
 
     // Plots.
     let mut plots = Vec::new();
@@ -222,6 +223,9 @@ pub fn run_all(quick: bool, out: &Path, summary: Option<&Path>) -> Result<(), St
     if guard.len() != 3 {
         empty.push("stretch guard".into());
     }
+    if solvers.len() != 14 {
+        empty.push("solvers".into());
+    }
 
     // Report.
     let mut r = String::new();
@@ -340,6 +344,7 @@ pub fn run_all(quick: bool, out: &Path, summary: Option<&Path>) -> Result<(), St
             p.label, p.cloth_ms, p.retries, p.max_stretch, p.mean_stretch, p.over, p.max_mm
         );
     }
+    super::solvers::section(&mut r, &solvers);
     let _ = writeln!(r, "\n## Plots\n");
     for f in &plots {
         let _ = writeln!(r, "![{f}]({f})\n");
