@@ -59,6 +59,18 @@ fn demo_runs_a_few_frames_stays_close_and_writes_outputs_that_read_back() {
         m.max_penetration_m
     );
     assert!(m.max_stretch <= 1.10, "stretch {}", m.max_stretch);
+    assert_eq!(
+        m.detached_share, 0.0,
+        "the dress stays on the walking mannequin"
+    );
+    // Soft compression springs (P1 eq. 1) let a few edges shorten a lot: measured 0.43.
+    assert!(
+        m.min_stretch > 0.0 && m.min_stretch <= m.mean_stretch && m.mean_stretch <= m.max_stretch,
+        "edge ratios {} / {} / {}",
+        m.min_stretch,
+        m.mean_stretch,
+        m.max_stretch
+    );
     for stage in [
         "motion",
         "skinning",
@@ -239,6 +251,18 @@ fn an_effect_that_cannot_act_changes_nothing_and_stages_are_only_the_enabled_one
             assert_eq!(x.map(f64::to_bits), y.map(f64::to_bits));
         }
     }
+    // Falling toward the sphere the sheet only comes nearer: nothing detached.
+    assert_eq!(a.stats.metrics.detached_share, 0.0);
+    // Below the sphere it falls away: after 0.2 s (20 cm) all of it has moved more than 10 cm
+    // farther than it started.
+    let below = falling_sheet("").clone_with_drop(-0.5);
+    let run = Pipeline::new(below).unwrap().run(None, |_, _| {});
+    assert_eq!(run.stats.metrics.detached_share, 1.0);
+    assert_eq!(
+        run.stats.per_frame[0].detached_share, 0.0,
+        "after one frame it is 2 mm lower"
+    );
+    assert_eq!(a.stats.metrics.max_penetration_m, 0.0);
     // A fixed body: no motion, skinning, following or collider updates.
     assert_eq!(with.stages(), vec!["cloth", "referee"]);
     let keys: Vec<&String> = a.stats.stages.keys().collect();
@@ -343,11 +367,18 @@ fn the_stretch_guard_key_reaches_the_solver_and_zero_turns_it_off() {
 
 trait WithRefine {
     fn clone_with_refine(self, level: u8) -> Scene;
+    fn clone_with_drop(self, height: Real) -> Scene;
 }
 
 impl WithRefine for Scene {
     fn clone_with_refine(mut self, level: u8) -> Scene {
         self.effects.refine = level;
+        self
+    }
+    fn clone_with_drop(mut self, height: Real) -> Scene {
+        if let tryon_pipeline::scene::GarmentSection::Square(g) = &mut self.garment {
+            g.drop_height = height;
+        }
         self
     }
 }

@@ -145,14 +145,23 @@ fn run(mut p: Pipeline, out: &Path, frames: Option<usize>, quiet: bool) -> Resul
             s.collider
         );
         println!(
-            "penetration max {:.2} mm, p99 {:.2} mm; stretch max {:.3}, mean {:.3}; retries {}, non-finite {}",
+            "penetration max {:.2} mm, p99 {:.2} mm; stretch {:.3}..{:.3}, mean {:.3}; detached {:.1}%; retries {}, rollbacks {}, non-finite {}",
             m.max_penetration_m * 1e3,
             m.p99_penetration_m * 1e3,
+            m.min_stretch,
             m.max_stretch,
             m.mean_stretch,
+            m.detached_share * 100.0,
             m.substep_retries,
+            m.rollbacks,
             m.non_finite_events
         );
+        if m.detached_share > 0.0 {
+            eprintln!(
+                "warning: {:.1}% of the garment moved more than 10 cm away from the body: it slid or fell off",
+                m.detached_share * 100.0
+            );
+        }
         for (name, t) in &s.stages {
             println!(
                 "  {name:<16} {:8.3} ms mean {:8.3} ms max",

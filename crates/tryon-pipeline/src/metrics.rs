@@ -1,18 +1,34 @@
-//! Accuracy metrics: edge stretch and penetration (by the exact referee).
+//! Accuracy metrics: edge stretch, penetration and detachment (by the exact referee).
 
-use body_collide::{ExactCollider, penetration_depths};
+use body_collide::ExactCollider;
 use tryon_core::math::{Real, Vec3};
+use tryon_core::stages::Collider;
 
-/// Largest and mean ratio of current to rest length over the given edges.
-pub fn stretch(edges: &[[u32; 2]], rest: &[Real], x: &[Vec3]) -> (Real, Real) {
-    let mut max: Real = 0.0;
+/// A garment vertex this much farther from the body than it started counts as detached (m).
+pub const DETACHED: Real = 0.1;
+
+/// Signed distance of every point to the referee's body (0 where it cannot say): the baseline
+/// [`penetration`] judges detachment against.
+pub fn distances(referee: &ExactCollider, points: &[Vec3]) -> Vec<Real> {
+    points
+        .iter()
+        .map(|p| referee.signed_distance(p).unwrap_or(0.0))
+        .collect()
+}
+
+/// Smallest, largest and mean ratio of current to rest length over the given edges (1, 0, 0 for
+/// none).
+pub fn stretch(edges: &[[u32; 2]], rest: &[Real], x: &[Vec3]) -> (Real, Real, Real) {
+    let (mut min, mut max): (Real, Real) = (1.0, 0.0);
     let mut sum = 0.0;
     for (e, r) in edges.iter().zip(rest) {
         let ratio = (x[e[0] as usize] - x[e[1] as usize]).norm() / r;
+        min = min.min(ratio);
         max = max.max(ratio);
         sum += ratio;
     }
     (
+        min,
         max,
         if edges.is_empty() {
             0.0
@@ -31,20 +47,35 @@ pub struct Penetration {
     pub p99: Real,
     /// Share of points deeper than 1 mm.
     pub share_over_1mm: Real,
+    /// Share of points more than [`DETACHED`] farther from the body than their distance in
+    /// `start`: a garment that slid or fell off reads here while its penetration reads 0 (a flared
+    /// hem that started far from the legs does not).
+    pub detached_share: Real,
 }
 
-/// Penetration of `points` into the referee's body.
-pub fn penetration(referee: &ExactCollider, points: &[Vec3]) -> Penetration {
-    let mut d = penetration_depths(referee, points);
-    if d.is_empty() {
+/// Penetration of `points` into the referee's body, and how many moved far from it compared
+/// with `start` (their distances at the start; missing entries count as 0).
+pub fn penetration(referee: &ExactCollider, points: &[Vec3], start: &[Real]) -> Penetration {
+    let signed: Vec<Real> = points
+        .iter()
+        .map(|p| referee.signed_distance(p).unwrap_or(0.0))
+        .collect();
+    if signed.is_empty() {
         return Penetration::default();
     }
+    let base = |i: usize| start.get(i).copied().unwrap_or(0.0).max(0.0);
+    let detached = (0..signed.len())
+        .filter(|&i| signed[i] > base(i) + DETACHED)
+        .count() as Real
+        / signed.len() as Real;
+    let mut d: Vec<Real> = signed.iter().map(|s| (-s).max(0.0)).collect();
     d.sort_by(|a, b| a.total_cmp(b));
     let k = ((d.len() as Real * 0.99).ceil() as usize).clamp(1, d.len()) - 1;
     Penetration {
         max: d[d.len() - 1],
         p99: d[k],
         share_over_1mm: d.iter().filter(|x| **x > 1e-3).count() as Real / d.len() as Real,
+        detached_share: detached,
     }
 }
 
@@ -75,8 +106,8 @@ mod tests {
             Vec3::new(2.0, 0.0, 0.0),
             Vec3::new(2.0, 1.0, 0.0),
         ];
-        let (max, mean) = stretch(&[[0, 1], [1, 2]], &[1.0, 1.0], &x);
-        assert_eq!((max, mean), (2.0, 1.5));
+        let (min, max, mean) = stretch(&[[0, 1], [1, 2]], &[1.0, 1.0], &x);
+        assert_eq!((min, max, mean), (1.0, 2.0, 1.5));
         assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
         assert_eq!(median(&[4.0, 1.0, 2.0, 3.0]), 2.5);
     }
@@ -87,12 +118,21 @@ mod tests {
         let pts: Vec<Vec3> = (0..100)
             .map(|i| Vec3::new(0.0, if i < 5 { 0.49 } else { 0.6 }, 0.0))
             .collect();
-        let p = penetration(&referee, &pts);
+        let p = penetration(&referee, &pts, &[]);
         assert!(p.max > 0.009 && p.max < 0.0105, "{p:?}");
         assert_eq!(p.share_over_1mm, 0.05);
         assert!(
             p.p99 > 0.009,
             "99th percentile of 5% inside is inside: {p:?}"
         );
+        // 0.6 is 0.1 m out: not detached; 0.65 is, unless it started 0.1 m out or more.
+        assert_eq!(p.detached_share, 0.0);
+        let far: Vec<Vec3> = (0..10)
+            .map(|i| Vec3::new(0.0, if i < 3 { 0.65 } else { 0.55 }, 0.0))
+            .collect();
+        assert!((penetration(&referee, &far, &[]).detached_share - 0.3).abs() < 1e-12);
+        let started = [0.12, 0.12, 0.0];
+        assert!((penetration(&referee, &far, &started).detached_share - 0.1).abs() < 1e-12);
+        assert!((distances(&referee, &far)[0] - 0.15).abs() < 1e-3);
     }
 }

@@ -47,6 +47,11 @@ pub struct Metrics {
     pub share_over_1mm: Real,
     /// Largest structural edge length / rest length over all frames.
     pub max_stretch: Real,
+    /// Smallest structural edge length / rest length over all frames.
+    pub min_stretch: Real,
+    /// Largest share, over frames, of garment vertices more than 10 cm farther from the body than
+    /// where they started: 0 while the garment stays on.
+    pub detached_share: Real,
     /// Mean over frames of the mean structural stretch.
     pub mean_stretch: Real,
     pub non_finite_events: u32,
@@ -67,6 +72,8 @@ pub struct FrameStats {
     pub max_penetration_m: Real,
     pub p99_penetration_m: Real,
     pub max_stretch: Real,
+    /// Share of garment vertices more than 10 cm farther from the body than where they started.
+    pub detached_share: Real,
     pub contacts: u32,
     pub retries: u32,
 }
@@ -164,6 +171,10 @@ impl Pipeline {
         let info = self.solver.info();
         let moving = self.motion.is_some();
         let mut st = self.start();
+        if moving {
+            tryon_core::stages::Collider::update(&mut self.referee, &st.body_frame);
+        }
+        let start_distances = crate::metrics::distances(&self.referee, self.output_garment());
         let garment_triangles = self.output_triangles();
         let (body_triangles, _) = self.body_mesh.triangulate();
         let refines = !self.surface_stages.is_empty();
@@ -248,12 +259,12 @@ impl Pipeline {
                 &coarse_x
             };
             let referee = &mut self.referee;
-            let (pen, (smax, smean)) = timers.time("referee", || {
+            let (pen, (smin, smax, smean)) = timers.time("referee", || {
                 if moving {
                     tryon_core::stages::Collider::update(referee, &body_frame);
                 }
                 (
-                    penetration(referee, output),
+                    penetration(referee, output, &start_distances),
                     stretch(&info.edges, &info.rest, &coarse_x),
                 )
             });
@@ -261,6 +272,12 @@ impl Pipeline {
             m.max_penetration_m = m.max_penetration_m.max(pen.max);
             m.p99_penetration_m = m.p99_penetration_m.max(pen.p99);
             m.max_stretch = m.max_stretch.max(smax);
+            m.min_stretch = if k == 1 {
+                smin
+            } else {
+                m.min_stretch.min(smin)
+            };
+            m.detached_share = m.detached_share.max(pen.detached_share);
             stretch_sum += smean;
             share_sum += pen.share_over_1mm;
             stats.per_frame.push(FrameStats {
@@ -268,6 +285,7 @@ impl Pipeline {
                 max_penetration_m: pen.max,
                 p99_penetration_m: pen.p99,
                 max_stretch: smax,
+                detached_share: pen.detached_share,
                 contacts: report.contacts,
                 retries: report.retries,
             });
