@@ -5,9 +5,11 @@ use crate::params::{ClothParams, ParamError};
 use std::collections::HashSet;
 use std::ops::Range;
 use thiserror::Error;
+use tryon_core::frames::CoarseFrame;
 pub use tryon_core::interact::Handle;
 use tryon_core::math::{Real, Vec3};
 use tryon_core::mesh::{Face, PolyMesh};
+use tryon_core::stages::ClothInfo;
 use tryon_core::topology::{Csr, NO_FACE, Topology, TopologyError};
 
 /// Which family a spring belongs to.
@@ -284,6 +286,59 @@ impl ClothModel {
     /// Total mass (kg).
     pub fn total_mass(&self) -> Real {
         self.mass.iter().sum()
+    }
+
+    /// What a solver of this model reports: its `method`, `nominal_substep` and number of force
+    /// `elements`, and the model's structural edges (stretch is judged on them) and masses.
+    pub fn info(&self, method: &'static str, nominal_substep: Real, elements: usize) -> ClothInfo {
+        let s = &self.springs;
+        let structural = self.structural.clone();
+        ClothInfo {
+            method,
+            nominal_substep,
+            particles: self.particle_count(),
+            springs: elements,
+            edges: structural.clone().map(|k| [s.i[k], s.j[k]]).collect(),
+            rest: structural.map(|k| s.rest[k]).collect(),
+            masses: self.mass.clone(),
+        }
+    }
+
+    /// The rest state, with handles at their path start.
+    pub fn initial_frame(&self) -> CoarseFrame {
+        let mut f = CoarseFrame::at_rest(self.rest_positions.clone());
+        for h in &self.handles {
+            f.positions[h.particle as usize] = h.position(0.0);
+        }
+        f
+    }
+
+    /// Holds handles `first..` at `targets` from now on (non-finite targets are skipped).
+    pub fn hold_handles(&mut self, first: usize, targets: &[Vec3]) {
+        for (h, p) in self.handles.iter_mut().skip(first).zip(targets) {
+            if tryon_core::math::is_finite(p) {
+                h.path.clear();
+                h.path.push((0.0, *p));
+            }
+        }
+    }
+
+    /// Sizes `frame` to the model and puts every non-finite particle back at rest; returns how
+    /// many were.
+    pub fn sanitize(&self, frame: &mut CoarseFrame) -> u32 {
+        let n = self.particle_count();
+        frame.positions.resize(n, Vec3::zeros());
+        frame.velocities.resize(n, Vec3::zeros());
+        let mut count = 0;
+        for i in 0..n {
+            let finite = tryon_core::math::is_finite;
+            if !finite(&frame.positions[i]) || !finite(&frame.velocities[i]) {
+                frame.positions[i] = self.rest_positions[i];
+                frame.velocities[i] = Vec3::zeros();
+                count += 1;
+            }
+        }
+        count
     }
 }
 

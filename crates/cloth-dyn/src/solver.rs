@@ -164,11 +164,7 @@ impl ClothSim {
 
     /// The rest state, with handles at their path start.
     pub fn initial_frame(&self) -> CoarseFrame {
-        let mut f = CoarseFrame::at_rest(self.model.rest_positions.clone());
-        for h in &self.model.handles {
-            f.positions[h.particle as usize] = h.position(0.0);
-        }
-        f
+        self.model.initial_frame()
     }
 
     /// One substep from absolute time `t`. Returns (non-finite particles, exploding particles).
@@ -292,18 +288,7 @@ impl ClothSim {
 
     /// Puts any non-finite particle of an incoming frame back at rest. Returns how many.
     fn sanitize(&self, frame: &mut CoarseFrame) -> u32 {
-        let mut count = 0;
-        let n = self.model.particle_count();
-        frame.positions.resize(n, Vec3::zeros());
-        frame.velocities.resize(n, Vec3::zeros());
-        for i in 0..n {
-            if !is_finite(&frame.positions[i]) || !is_finite(&frame.velocities[i]) {
-                frame.positions[i] = self.model.rest_positions[i];
-                frame.velocities[i] = Vec3::zeros();
-                count += 1;
-            }
-        }
-        count
+        self.model.sanitize(frame)
     }
 }
 
@@ -342,17 +327,9 @@ pub fn contact_velocity(v: Vec3, normal: Vec3, body_velocity: Vec3, mu: Real) ->
 
 impl ClothSolver for ClothSim {
     fn info(&self) -> ClothInfo {
-        let s = &self.model.springs;
-        let structural = self.model.structural.clone();
-        ClothInfo {
-            method: self.integrator_name(),
-            nominal_substep: self.nominal_substep(),
-            particles: self.model.particle_count(),
-            springs: s.len(),
-            edges: structural.clone().map(|k| [s.i[k], s.j[k]]).collect(),
-            rest: structural.map(|k| s.rest[k]).collect(),
-            masses: self.model.mass.clone(),
-        }
+        let springs = self.model.springs.len();
+        self.model
+            .info(self.integrator_name(), self.nominal_substep(), springs)
     }
 
     fn initial_frame(&self) -> CoarseFrame {
@@ -360,12 +337,7 @@ impl ClothSolver for ClothSim {
     }
 
     fn hold_handles(&mut self, first: usize, targets: &[Vec3]) {
-        for (h, p) in self.model.handles.iter_mut().skip(first).zip(targets) {
-            if is_finite(p) {
-                h.path.clear();
-                h.path.push((0.0, *p));
-            }
-        }
+        self.model.hold_handles(first, targets)
     }
 
     fn grab(&mut self, handle: Handle) {

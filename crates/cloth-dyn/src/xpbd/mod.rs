@@ -275,22 +275,6 @@ impl XpbdSim {
         bad
     }
 
-    /// Puts non-finite input particles back at rest; returns how many.
-    fn sanitize(&self, frame: &mut CoarseFrame) -> u32 {
-        let n = self.model.particle_count();
-        frame.positions.resize(n, Vec3::zeros());
-        frame.velocities.resize(n, Vec3::zeros());
-        let mut count = 0;
-        for i in 0..n {
-            if !is_finite(&frame.positions[i]) || !is_finite(&frame.velocities[i]) {
-                frame.positions[i] = self.model.rest_positions[i];
-                frame.velocities[i] = Vec3::zeros();
-                count += 1;
-            }
-        }
-        count
-    }
-
     /// The whole frame in `n` substeps; returns the bad particles of the worst substep.
     fn frame_in(
         &mut self,
@@ -311,25 +295,12 @@ impl XpbdSim {
 
 impl ClothSolver for XpbdSim {
     fn info(&self) -> ClothInfo {
-        let s = &self.model.springs;
-        let structural = self.model.structural.clone();
-        ClothInfo {
-            method: "xpbd",
-            nominal_substep: self.xpbd.substep,
-            particles: self.model.particle_count(),
-            springs: self.edges.len() + self.hinges.len(),
-            edges: structural.clone().map(|k| [s.i[k], s.j[k]]).collect(),
-            rest: structural.map(|k| s.rest[k]).collect(),
-            masses: self.model.mass.clone(),
-        }
+        let elements = self.edges.len() + self.hinges.len();
+        self.model.info("xpbd", self.xpbd.substep, elements)
     }
 
     fn initial_frame(&self) -> CoarseFrame {
-        let mut f = CoarseFrame::at_rest(self.model.rest_positions.clone());
-        for h in &self.model.handles {
-            f.positions[h.particle as usize] = h.position(0.0);
-        }
-        f
+        self.model.initial_frame()
     }
 
     fn step_frame(
@@ -339,7 +310,7 @@ impl ClothSolver for XpbdSim {
         collider: &mut dyn Collider,
     ) -> StepReport {
         let mut report = StepReport::default();
-        let bad_input = self.sanitize(frame);
+        let bad_input = self.model.sanitize(frame);
         report.rollbacks += bad_input;
         report.non_finite_events += bad_input;
         if !(dt.is_finite() && dt > 0.0) {
@@ -385,12 +356,7 @@ impl ClothSolver for XpbdSim {
     }
 
     fn hold_handles(&mut self, first: usize, targets: &[Vec3]) {
-        for (h, p) in self.model.handles.iter_mut().skip(first).zip(targets) {
-            if is_finite(p) {
-                h.path.clear();
-                h.path.push((0.0, *p));
-            }
-        }
+        self.model.hold_handles(first, targets)
     }
 
     fn grab(&mut self, handle: Handle) {
