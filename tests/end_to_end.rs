@@ -403,3 +403,30 @@ fn the_drape_scene_file_uses_the_drape_fixtures_material() {
     assert_eq!(info.nominal_substep, sim.nominal_substep());
     assert_eq!(info.springs, sim.model.springs.len());
 }
+
+#[test]
+fn the_referee_judges_every_nth_frame_or_none_and_says_how_many() {
+    let judged = |every: usize| {
+        let mut s = falling_sheet("");
+        s.output.referee_every = every;
+        let run = Pipeline::new(s).unwrap().run(None, |_, _| {});
+        assert_eq!(
+            run.frames.len(),
+            13,
+            "every frame is output whatever is judged"
+        );
+        let frames: Vec<usize> = run.stats.per_frame.iter().map(|f| f.frame).collect();
+        (
+            run.stats.metrics.judged_frames,
+            frames,
+            run.stats.metrics.mean_stretch,
+        )
+    };
+    let (n, frames, mean) = judged(1);
+    assert_eq!((n, frames.len()), (12, 12));
+    assert!(mean > 0.9, "mean stretch {mean}");
+    assert_eq!(judged(5).0, 2);
+    assert_eq!(judged(5).1, vec![5, 10]);
+    let (n, frames, mean) = judged(0);
+    assert_eq!((n, frames.len(), mean), (0, 0, 0.0));
+}

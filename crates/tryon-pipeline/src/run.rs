@@ -63,6 +63,8 @@ pub struct Metrics {
     pub length_error: Option<Real>,
     /// Garment vertices moved out of the body when placing it on the rest pose.
     pub placement_moved: usize,
+    /// Frames the referee judged (`[output] referee_every`); the figures above are over these.
+    pub judged_frames: usize,
 }
 
 /// Per-frame figures (for plots and regressions).
@@ -174,7 +176,12 @@ impl Pipeline {
         if moving {
             tryon_core::stages::Collider::update(&mut self.referee, &st.body_frame);
         }
-        let start_distances = crate::metrics::distances(&self.referee, self.output_garment());
+        let every = self.scene.output.referee_every;
+        let start_distances = if every > 0 {
+            crate::metrics::distances(&self.referee, self.output_garment())
+        } else {
+            Vec::new()
+        };
         let garment_triangles = self.output_triangles();
         let (body_triangles, _) = self.body_mesh.triangulate();
         let refines = !self.surface_stages.is_empty();
@@ -244,6 +251,22 @@ impl Pipeline {
             };
             let t = self.frame_time(k);
             total.accumulate(&report);
+            let output = if refines {
+                &self.surface.positions
+            } else {
+                &coarse_x
+            };
+            if every == 0 || k % every != 0 {
+                sink.frame(&FrameRecord {
+                    time: t,
+                    garment: output.clone(),
+                    pose,
+                });
+                timers.end_frame();
+                progress(k, frames);
+                continue;
+            }
+            stats.metrics.judged_frames += 1;
             if let Some((e, n)) = timers.time("referee", || {
                 self.surface_stages
                     .iter()
@@ -253,11 +276,6 @@ impl Pipeline {
                 length_sum += e;
                 length_frames += 1;
             }
-            let output = if refines {
-                &self.surface.positions
-            } else {
-                &coarse_x
-            };
             let referee = &mut self.referee;
             let (pen, (smin, smax, smean)) = timers.time("referee", || {
                 if moving {
@@ -272,7 +290,7 @@ impl Pipeline {
             m.max_penetration_m = m.max_penetration_m.max(pen.max);
             m.p99_penetration_m = m.p99_penetration_m.max(pen.p99);
             m.max_stretch = m.max_stretch.max(smax);
-            m.min_stretch = if k == 1 {
+            m.min_stretch = if m.judged_frames == 1 {
                 smin
             } else {
                 m.min_stretch.min(smin)
@@ -298,8 +316,9 @@ impl Pipeline {
             progress(k, frames);
         }
         stats.loop_s = loop_start.elapsed().as_secs_f64();
-        stats.metrics.mean_stretch = stretch_sum / frames.max(1) as Real;
-        stats.metrics.share_over_1mm = share_sum / frames.max(1) as Real;
+        let judged = stats.metrics.judged_frames.max(1) as Real;
+        stats.metrics.mean_stretch = stretch_sum / judged;
+        stats.metrics.share_over_1mm = share_sum / judged;
         stats.metrics.non_finite_events = total.non_finite_events;
         stats.metrics.substep_retries = total.retries;
         stats.metrics.rollbacks = total.rollbacks;

@@ -246,6 +246,11 @@ pub struct OutputSection {
     /// Preview height (pixels).
     #[schemars(range(min = 16, max = 8192))]
     pub preview_height: u32,
+    /// Judge every n-th frame with the exact referee (penetration, detachment, stretch, length
+    /// error); 0 = never (the metrics then read 0 and `metrics.judged_frames` says so). The
+    /// referee is measurement, not product: on the demo it is most of the wall time.
+    #[schemars(range(max = 100000))]
+    pub referee_every: usize,
 }
 
 impl Default for OutputSection {
@@ -257,6 +262,7 @@ impl Default for OutputSection {
             preview_frame: None,
             preview_width: 800,
             preview_height: 1000,
+            referee_every: 1,
         }
     }
 }
