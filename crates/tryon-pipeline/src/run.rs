@@ -256,57 +256,49 @@ impl Pipeline {
             } else {
                 &coarse_x
             };
-            if every == 0 || k % every != 0 {
-                sink.frame(&FrameRecord {
-                    time: t,
-                    garment: output.clone(),
-                    pose,
-                });
-                timers.end_frame();
-                progress(k, frames);
-                continue;
-            }
-            stats.metrics.judged_frames += 1;
-            if let Some((e, n)) = timers.time("referee", || {
-                self.surface_stages
-                    .iter()
-                    .find_map(|s| s.length_error(&self.surface))
-            }) && n > 0
-            {
-                length_sum += e;
-                length_frames += 1;
-            }
-            let referee = &mut self.referee;
-            let (pen, (smin, smax, smean)) = timers.time("referee", || {
-                if moving {
-                    tryon_core::stages::Collider::update(referee, &body_frame);
+            if every > 0 && k % every == 0 {
+                stats.metrics.judged_frames += 1;
+                if let Some((e, n)) = timers.time("referee", || {
+                    self.surface_stages
+                        .iter()
+                        .find_map(|s| s.length_error(&self.surface))
+                }) && n > 0
+                {
+                    length_sum += e;
+                    length_frames += 1;
                 }
-                (
-                    penetration(referee, output, &start_distances),
-                    stretch(&info.edges, &info.rest, &coarse_x),
-                )
-            });
-            let m = &mut stats.metrics;
-            m.max_penetration_m = m.max_penetration_m.max(pen.max);
-            m.p99_penetration_m = m.p99_penetration_m.max(pen.p99);
-            m.max_stretch = m.max_stretch.max(smax);
-            m.min_stretch = if m.judged_frames == 1 {
-                smin
-            } else {
-                m.min_stretch.min(smin)
-            };
-            m.detached_share = m.detached_share.max(pen.detached_share);
-            stretch_sum += smean;
-            share_sum += pen.share_over_1mm;
-            stats.per_frame.push(FrameStats {
-                frame: k,
-                max_penetration_m: pen.max,
-                p99_penetration_m: pen.p99,
-                max_stretch: smax,
-                detached_share: pen.detached_share,
-                contacts: report.contacts,
-                retries: report.retries,
-            });
+                let referee = &mut self.referee;
+                let (pen, (smin, smax, smean)) = timers.time("referee", || {
+                    if moving {
+                        tryon_core::stages::Collider::update(referee, &body_frame);
+                    }
+                    (
+                        penetration(referee, output, &start_distances),
+                        stretch(&info.edges, &info.rest, &coarse_x),
+                    )
+                });
+                let m = &mut stats.metrics;
+                m.max_penetration_m = m.max_penetration_m.max(pen.max);
+                m.p99_penetration_m = m.p99_penetration_m.max(pen.p99);
+                m.max_stretch = m.max_stretch.max(smax);
+                m.min_stretch = if m.judged_frames == 1 {
+                    smin
+                } else {
+                    m.min_stretch.min(smin)
+                };
+                m.detached_share = m.detached_share.max(pen.detached_share);
+                stretch_sum += smean;
+                share_sum += pen.share_over_1mm;
+                stats.per_frame.push(FrameStats {
+                    frame: k,
+                    max_penetration_m: pen.max,
+                    p99_penetration_m: pen.p99,
+                    max_stretch: smax,
+                    detached_share: pen.detached_share,
+                    contacts: report.contacts,
+                    retries: report.retries,
+                });
+            }
             sink.frame(&FrameRecord {
                 time: t,
                 garment: output.clone(),

@@ -60,6 +60,27 @@ fn invalid(
     }
 }
 
+/// The table `value` holds, with its span, or an error naming `name`.
+fn table_of<'i>(
+    text: &str,
+    file: &Path,
+    name: &str,
+    value: Spanned<DeValue<'i>>,
+) -> Result<(std::ops::Range<usize>, DeTable<'i>), SceneError> {
+    let span = value.span();
+    match value.into_inner() {
+        DeValue::Table(t) => Ok((span, t)),
+        _ => Err(invalid(
+            text,
+            file,
+            span.start,
+            name,
+            "a value".into(),
+            format!("a [{name}] table"),
+        )),
+    }
+}
+
 /// A plain table.
 fn plain<T: DeserializeOwned>(
     text: &str,
@@ -67,17 +88,7 @@ fn plain<T: DeserializeOwned>(
     name: &str,
     value: Spanned<DeValue<'_>>,
 ) -> Result<T, SceneError> {
-    let span = value.span();
-    let DeValue::Table(table) = value.into_inner() else {
-        return Err(invalid(
-            text,
-            file,
-            span.start,
-            name,
-            "a value".into(),
-            format!("a [{name}] table"),
-        ));
-    };
+    let (span, table) = table_of(text, file, name, value)?;
     T::deserialize(Deserializer::from(Spanned::new(span, table)))
         .map_err(|e| located(e, text, file, name))
 }
@@ -89,22 +100,12 @@ fn tagged<T: DeserializeOwned + schemars::JsonSchema>(
     name: &str,
     value: Spanned<DeValue<'_>>,
 ) -> Result<T, SceneError> {
-    let span = value.span();
     let kinds = super::docs::variant_names::<T>()
         .iter()
         .map(|k| format!("\"{k}\""))
         .collect::<Vec<_>>()
         .join(", ");
-    let DeValue::Table(mut table) = value.into_inner() else {
-        return Err(invalid(
-            text,
-            file,
-            span.start,
-            name,
-            "a value".into(),
-            format!("a [{name}] table"),
-        ));
-    };
+    let (span, mut table) = table_of(text, file, name, value)?;
     let key = table.keys().find(|k| k.get_ref() == "kind").cloned();
     let Some(kind) = key.and_then(|k| table.remove(&k)) else {
         return Err(invalid(
