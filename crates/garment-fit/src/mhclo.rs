@@ -33,6 +33,12 @@ pub enum FitError {
         #[source]
         source: MeshError,
     },
+    #[error("binding `{name}`: the fitted garment's borders cannot be traced: {source}")]
+    Topology {
+        name: String,
+        #[source]
+        source: tryon_core::topology::TopologyError,
+    },
 }
 
 /// Per-axis scale of the binding's offsets on `body`.

@@ -47,7 +47,15 @@ pub fn weld_short_edges(mesh: &PolyMesh, min_len: Real) -> Result<Welded, MeshEr
             }
         }
     }
-    let roots: Vec<usize> = (0..n).map(|v| find(&mut parent, v)).collect();
+    merge(mesh, &mut parent)
+}
+
+/// Merges the vertices of every union-find group of `parent` (one entry per vertex) into one at
+/// their mean position; faces left with fewer than three distinct vertices or no area are dropped,
+/// and vertices no face uses. Vertices keep their relative order.
+pub(crate) fn merge(mesh: &PolyMesh, parent: &mut [usize]) -> Result<Welded, MeshError> {
+    let n = mesh.positions.len();
+    let roots: Vec<usize> = (0..n).map(|v| find(parent, v)).collect();
     let mut map = vec![u32::MAX; n];
     let mut sum: Vec<(Vec3, Real)> = Vec::new();
     for v in 0..n {

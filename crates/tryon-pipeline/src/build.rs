@@ -197,11 +197,29 @@ pub fn garment(
                 .map_err(|e| AssembleError::Asset(e.into()))?;
             // Collapse sliver edges (doubled hems): below 15% of the median edge.
             let min_len = 0.15 * garment_fit::median_edge(&fitted);
-            let welded = garment_fit::weld_short_edges(&fitted, min_len).map_err(|e| {
+            let mesh_error = |source| {
                 let name = binding.name.clone();
-                AssembleError::Asset(garment_fit::FitError::Mesh { name, source: e }.into())
-            })?;
-            welded.mesh
+                AssembleError::Asset(garment_fit::FitError::Mesh { name, source }.into())
+            };
+            let welded = garment_fit::weld_short_edges(&fitted, min_len).map_err(mesh_error)?;
+            // Close what the modeller left touching (a buttoned front).
+            if g.closures > 0.0 {
+                let gap = g.closures * garment_fit::median_edge(&welded.mesh);
+                let closed =
+                    garment_fit::close_openings(&welded.mesh, gap).map_err(|e| match e {
+                        garment_fit::CloseError::Mesh(m) => mesh_error(m),
+                        garment_fit::CloseError::Topology(t) => AssembleError::Asset(
+                            garment_fit::FitError::Topology {
+                                name: binding.name.clone(),
+                                source: t,
+                            }
+                            .into(),
+                        ),
+                    })?;
+                closed.0.mesh
+            } else {
+                welded.mesh
+            }
         }
     })
 }
@@ -264,7 +282,11 @@ pub fn solver(
     Ok(match scene.cloth.solver {
         SolverName::P1 => Box::new(cloth_sim(scene, garment, handles, kinematic)?),
         SolverName::Xpbd => {
-            let p = cloth_params(scene, garment)?;
+            let mut p = cloth_params(scene, garment)?;
+            // XPBD's edges are inextensible: a garment cut 5% small (P1's worn-under-tension
+            // rest scale) would be torn between its edges and the body (stretch 2.0 by frame 3 on
+            // makehuman-dress-walk); it is worn at its modelled size.
+            p.rest_scale = 1.0;
             let model = ClothModel::build_with_kinematic(garment, &p, handles, kinematic)?;
             let c = &scene.cloth;
             let x = XpbdParams {

@@ -12,6 +12,7 @@ pub mod constraints;
 
 use crate::model::{ClothModel, Handle};
 use crate::params::ClothParams;
+use crate::strain::Tethers;
 use constraints::{Edge, Hinge, colour, dihedral};
 use std::collections::HashMap;
 use std::ops::Range;
@@ -64,6 +65,8 @@ pub struct XpbdSim {
     backup_v: Vec<Vec3>,
     elastic: Vec<Vec3>,
     contacts: Vec<Contact>,
+    tethers: Tethers,
+    tethers_stale: bool,
 }
 
 /// The unique edges of `triangles` and the interior edges' hinges (the two triangles' opposite
@@ -129,6 +132,8 @@ impl XpbdSim {
             backup_v: z.clone(),
             elastic: z,
             contacts: Vec::new(),
+            tethers: Tethers::default(),
+            tethers_stale: true,
         }
     }
 
@@ -255,7 +260,15 @@ impl XpbdSim {
         }
         let mut x = std::mem::take(&mut frame.positions);
         let passes = self.xpbd.iterations.max(1);
+        let tethers = self.params.tethers && !self.model.handles.is_empty();
+        if tethers && self.tethers_stale {
+            self.tethers.compute(&self.model);
+            self.tethers_stale = false;
+        }
         for pass in 0..passes {
+            if tethers {
+                self.tethers.project(1.0, &mut x);
+            }
             self.solve_edges(&mut x, h, last && pass + 1 == passes);
             self.solve_hinges(&mut x, h);
         }
@@ -366,6 +379,7 @@ impl ClothSolver for XpbdSim {
         }
         self.model.inv_mass[p] = 0.0;
         self.model.handles.push(handle);
+        self.tethers_stale = true;
     }
 }
 

@@ -342,6 +342,16 @@ pub struct MhcloSpec {
     #[serde(default = "modelled_band_gap")]
     #[schemars(range(min = 0.0, max = 0.05))]
     pub band_gap: Real,
+    /// Closures (fraction of the median edge): border vertices the modeller left touching, as a
+    /// buttoned front or a shut slit, closer than this are sewn together, where they form a seam of
+    /// at least two pairs; 0 = none.
+    #[serde(default = "closure_gap")]
+    #[schemars(range(min = 0.0, max = 2.0))]
+    pub closures: Real,
+}
+
+fn closure_gap() -> Real {
+    garment_fit::close::MODELLED_CLOSURE_GAP
 }
 
 fn modelled_band_gap() -> Real {
