@@ -179,3 +179,83 @@ fn both_clips_retarget_finite_at_scene_rate() {
         );
     }
 }
+
+#[test]
+fn hands_point_where_the_source_hands_point() {
+    // CMU's fingers start where the hand does, so a hand's rest direction is its forearm's; the
+    // MakeHuman hand's is toward its tail. Before this was handled the hand kept MakeHuman's rest
+    // orientation under CMU's rotation and hung palm up, fingers across the hips (up to 94 degrees
+    // off).
+    let rig = makehuman_rig();
+    let c = clip("10_04.bvh");
+    let r = retarget(&c, &rig, &at_source_rate(&c)).unwrap();
+    let src = Rig::from_clip(&c);
+    let mut worst: Real = 0.0;
+    for (p, t) in r.poses.iter().zip(&r.source_times) {
+        let sp = &c.frames[(t / c.frame_time).round() as usize];
+        let (sg, _) = joint_transforms(&src.skeleton, &src.rest, sp);
+        let (tg, _) = joint_transforms(&rig.skeleton, &rig.rest, p);
+        for (hand, forearm) in [("LeftHand", "LeftForeArm"), ("RightHand", "RightForeArm")] {
+            let (sh, sf) = (index(&src, hand), index(&src, forearm));
+            let th = index(&rig, hand);
+            let ds = sg[sh] * (src.rest[sh] - src.rest[sf]);
+            let dt = tg[th] * (rig.tips[th].unwrap() - rig.rest[th]);
+            worst = worst.max(ds.angle(&dt).to_degrees());
+        }
+    }
+    eprintln!("10_04 -> MakeHuman: hands within {worst:.2e} degrees");
+    assert!(worst < 1e-3, "a hand is {worst} degrees off");
+}
+
+#[test]
+fn no_joint_turns_faster_than_a_person_can() {
+    // The scenes' bodies as built (retargeting, arm clearance, turn limit), both clips, MakeHuman
+    // and the mannequin: a retargeting fault (an arm twisted into a knot) or a glitch in the data
+    // shows as a joint turning far faster than any person's does between two frames. Without
+    // the limit: 1,044 degrees per second on makehuman-dress-walk (a toe), 5,270 on
+    // makehuman-casual-131 (131_01's glitch at 1.97 s).
+    use mocap_retarget::turns::{DEFAULT_LIMIT_DEG_PER_S, fastest_turn};
+    use tryon_pipeline::{Pipeline, Scene};
+    let scenes = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/scenes");
+    let mannequin = |clip: &str| {
+        format!(
+            "[scene]\nname = \"m\"\nfps = 30\n[body]\nkind = \"mannequin\"\n[garment]\nkind = \"dress\"\n\
+             [motion]\nkind = \"bvh\"\nfile = \"cmu-mocap-bvh/{clip}\"\n"
+        )
+    };
+    let mut cases: Vec<(String, String)> = ["makehuman-dress-walk", "makehuman-casual-131"]
+        .iter()
+        .map(|s| {
+            let path = scenes.join(format!("{s}.toml"));
+            (s.to_string(), std::fs::read_to_string(path).unwrap())
+        })
+        .collect();
+    for clip in ["10_04.bvh", "131_01.bvh"] {
+        cases.push((format!("mannequin {clip}"), mannequin(clip)));
+    }
+    for (name, text) in cases {
+        let scene = Scene::parse(&text, &scenes.join("t.toml")).unwrap();
+        let p = Pipeline::new(scene).unwrap();
+        let rig = p.body.rig().unwrap();
+        let motion = p.motion.as_ref().unwrap();
+        let dt = 1.0 / 30.0;
+        let n = (motion.duration() / dt) as usize;
+        let poses: Vec<Pose> = (0..=n)
+            .map(|k| {
+                let mut q = Pose::rest(rig.skeleton.names.len());
+                motion.sample(k as Real * dt, &mut q);
+                q
+            })
+            .collect();
+        let t = fastest_turn(rig.skeleton, rig.joint_rest, &poses, dt).unwrap();
+        eprintln!(
+            "{name}: fastest turn {:.0} deg/s ({} at frame {})",
+            t.deg_per_s, t.joint, t.frame
+        );
+        // The scenes' limit (max_turn), a little over for the interpolation between frames.
+        assert!(
+            t.deg_per_s <= DEFAULT_LIMIT_DEG_PER_S * 1.001,
+            "{name}: {t:?}"
+        );
+    }
+}

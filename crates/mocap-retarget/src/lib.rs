@@ -3,10 +3,12 @@
 //! ([`names`]), rest-pose alignment, analytic two-bone leg IK ([`ik`]), rotation copy for the upper
 //! body, resampling to the scene's rate ([`retarget()`]).
 
+pub mod clearance;
 pub mod clips;
 pub mod ik;
 pub mod names;
 pub mod retarget;
+pub mod turns;
 
 pub use clips::{ArmRaise, ClipError, Walk, WalkParams};
 pub use ik::{LegSolution, frame_rotation, solve_leg};

@@ -50,8 +50,10 @@ impl Rig {
         Rig::new(s.clone(), rest, tips)
     }
 
-    /// Rest direction of `role`'s bone: toward the next role of its chain that sits elsewhere, else a
-    /// child joint, else the tip.
+    /// Rest direction of `role`'s bone: toward the next role of its chain that sits elsewhere, else
+    /// the bone's tip where the rig knows it, else a child joint elsewhere, else the direction of
+    /// the chain's bone before it. (A child before the tip would take a hand's direction from
+    /// whichever finger is listed first: MakeHuman lists the thumb, 30 degrees off the hand.)
     fn direction(&self, map: &RoleMap, role: Role) -> Option<Vec3> {
         let j = map.get(role)?;
         let chain = CHAINS.iter().find(|c| c.contains(&role))?;
@@ -62,7 +64,19 @@ impl Rig {
                 return Some(d);
             }
         }
-        self.child_direction(j)
+        self.tips
+            .get(j)
+            .copied()
+            .flatten()
+            .and_then(far)
+            .or_else(|| self.child_direction(j))
+            // A bone with nothing beyond it (CMU's hands: their fingers start where they do)
+            // continues the bone before it: without a direction its rest alignment would be lost
+            // and the hand would keep the target's rest orientation under the source's rotation.
+            .or_else(|| {
+                let before = chain[..at].iter().rev().find(|r| map.get(**r).is_some())?;
+                self.direction(map, *before)
+            })
     }
 
     /// Rest direction from joint `j` to its first child elsewhere, else to its tip.
@@ -158,6 +172,8 @@ pub struct Retargeted {
     pub source_times: Vec<Real>,
     /// Output frames in which an ankle target was out of reach (the leg was straightened).
     pub unreachable_frames: usize,
+    /// What [`crate::clearance::keep_arms_clear`] did, if it ran.
+    pub clearance: crate::clearance::Clearance,
 }
 
 fn swing(from: Vec3, to: Vec3) -> UnitQuat {
@@ -515,6 +531,7 @@ pub fn retarget(
         ease_frames,
         source_times,
         unreachable_frames: unreachable,
+        clearance: Default::default(),
     })
 }
 

@@ -92,7 +92,12 @@ pub(crate) fn body(scene: &Scene) -> Result<BuiltBody, AssembleError> {
             let mesh = b.mesh();
             let mut built = if let MotionSection::Bvh(bvh) = &scene.motion {
                 let tips = b.joint_tails.iter().map(|t| Some(*t)).collect();
-                let r = real::bvh_motion(scene, bvh, &b.skeleton, &b.joint_rest, tips)?;
+                let skin = real::BodySkin {
+                    points: &b.rest[..b.body_vertices],
+                    joints: &b.skin.joints,
+                    weights: &b.skin.weights,
+                };
+                let r = real::bvh_motion(scene, bvh, &b.skeleton, &b.joint_rest, tips, Some(skin))?;
                 BuiltBody {
                     clip_len: r.duration(),
                     model: Box::new(b.skinned()),
@@ -136,6 +141,11 @@ fn mannequin(scene: &Scene, spec: &MannequinBody) -> Result<BuiltBody, AssembleE
             &man.skeleton,
             &man.joint_rest,
             vec![None; man.joint_rest.len()],
+            Some(real::BodySkin {
+                points: &man.mesh.positions,
+                joints: &man.skin.joints,
+                weights: &man.skin.weights,
+            }),
         )?),
     };
     let (tris, _) = man.mesh.triangulate();

@@ -4,10 +4,12 @@
 
 use crate::scene::{BvhSpec, MakeHumanSpec, RigName, Scene};
 use body_model::{MakeHumanBody, MakeHumanError};
+use mocap_retarget::clearance::{Envelope, SMOOTHING_S, keep_arms_clear};
+use mocap_retarget::turns::limit_turns;
 use mocap_retarget::{Placement, RetargetError, RetargetOptions, Retargeted, Rig, retarget};
 use std::path::{Path, PathBuf};
 use thiserror::Error;
-use tryon_core::math::Vec3;
+use tryon_core::math::{Real, Vec3};
 use tryon_core::measure::Measurements;
 use tryon_core::pose::Skeleton;
 use tryon_io::{MhRig, ReadError};
@@ -145,6 +147,7 @@ pub fn bvh_motion(
     skeleton: &Skeleton,
     joint_rest: &[Vec3],
     tips: Vec<Option<Vec3>>,
+    skin: Option<BodySkin<'_>>,
 ) -> Result<Retargeted, AssetError> {
     let path = resolve(scene, "motion.file", &m.file)?;
     let clip = tryon_io::read_bvh(&path, m.unit)?;
@@ -157,5 +160,38 @@ pub fn bvh_motion(
         ease_in: m.ease_in,
         skip_synthetic: true,
     };
-    Ok(retarget(&clip, &rig, &opt)?)
+    let mut motion = retarget(&clip, &rig, &opt)?;
+    if let Some(b) = skin.filter(|_| m.arm_clearance > 0.0) {
+        let envelope = Envelope::from_skin(b.points, b.joints, b.weights, skeleton, joint_rest);
+        if let Some(e) = envelope {
+            let window = (SMOOTHING_S * opt.fps).round() as usize;
+            keep_arms_clear(
+                &mut motion,
+                joint_rest,
+                &rig.tips,
+                &e,
+                m.arm_clearance,
+                window,
+            );
+        }
+    }
+    if m.max_turn > 0.0 {
+        let dt = motion.frame_time;
+        limit_turns(
+            &motion.skeleton,
+            joint_rest,
+            &mut motion.poses,
+            dt,
+            m.max_turn,
+        );
+    }
+    Ok(motion)
+}
+
+/// A skinned body at rest: the vertices and their four strongest joints and weights.
+#[derive(Clone, Copy, Debug)]
+pub struct BodySkin<'a> {
+    pub points: &'a [Vec3],
+    pub joints: &'a [[u16; 4]],
+    pub weights: &'a [[Real; 4]],
 }

@@ -460,6 +460,25 @@ pub struct BvhSpec {
     #[serde(default)]
     #[schemars(range(min = 1e-4, max = 10.0))]
     pub unit: Option<Real>,
+    /// Arms are opened sideways, frame by frame and smoothly, until the elbow, wrist and hand
+    /// joints lie at least this far (m) outside the body's rest shape (a source whose hips are
+    /// narrower than the body's would hang the hands inside the hips); 0 = off.
+    #[serde(default = "bvh_arm_clearance")]
+    #[schemars(range(min = 0.0, max = 0.2))]
+    pub arm_clearance: Real,
+    /// Fastest a joint may turn (degrees per second): faster turns in the data (a glitch: 131_01's
+    /// right wrist spins 7,760 degrees per second for two frames) are cut to this; 0 = no limit.
+    #[serde(default = "bvh_max_turn")]
+    #[schemars(range(min = 0.0, max = 100000.0))]
+    pub max_turn: Real,
+}
+
+fn bvh_max_turn() -> Real {
+    mocap_retarget::turns::DEFAULT_LIMIT_DEG_PER_S
+}
+
+fn bvh_arm_clearance() -> Real {
+    mocap_retarget::clearance::DEFAULT_MARGIN
 }
 
 fn bvh_start() -> Real {
