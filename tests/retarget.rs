@@ -259,3 +259,52 @@ fn no_joint_turns_faster_than_a_person_can() {
         );
     }
 }
+
+#[test]
+fn a_fast_body_is_moved_in_sub_frames_near_the_cloth_only() {
+    // The mannequin in its dress under 131_01 (lunges and arm swings): frames whose body moves
+    // more than body_step near the cloth are split; body_step = 0 never splits; a body holding
+    // still never does; the split run stays finite.
+    use tryon_pipeline::timers::Timers;
+    use tryon_pipeline::{Pipeline, Scene};
+    let scenes = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/scenes");
+    let text = |motion: &str, step: &str| {
+        format!(
+            "[scene]\nname = \"m\"\nfps = 30\nsettle = 0\nbody_step = {step}\n[body]\nkind = \"mannequin\"\n\
+             [garment]\nkind = \"dress\"\n[motion]\n{motion}\n"
+        )
+    };
+    let parts = |t: String, frames: usize| {
+        let mut p = Pipeline::new(Scene::parse(&t, &scenes.join("t.toml")).unwrap()).unwrap();
+        let mut st = p.start();
+        let mut timers = Timers::default();
+        let parts: Vec<u32> = (1..=frames)
+            .map(|k| {
+                p.advance_coarse(&mut st, p.frame_time(k), &mut timers)
+                    .body_parts
+            })
+            .collect();
+        assert!(
+            p.cloth
+                .positions
+                .iter()
+                .all(|x| x.iter().all(|c| c.is_finite()))
+        );
+        parts
+    };
+    let clip = "kind = \"bvh\"\nfile = \"cmu-mocap-bvh/131_01.bvh\"\nease_in = 0";
+    let split = parts(text(clip, "0.08"), 90);
+    let most = *split.iter().max().unwrap();
+    eprintln!(
+        "131_01 on the mannequin: {} of 90 frames split, at most {most} parts",
+        split.iter().filter(|&&n| n > 1).count()
+    );
+    assert!(most >= 2 && most <= 8, "{split:?}");
+    assert!(split.iter().all(|&n| n >= 1));
+    assert!(parts(text(clip, "0"), 30).iter().all(|&n| n == 1));
+    assert!(
+        parts(text("kind = \"still\"", "0.001"), 10)
+            .iter()
+            .all(|&n| n == 1)
+    );
+}

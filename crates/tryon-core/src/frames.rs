@@ -44,6 +44,8 @@ pub struct StepReport {
     pub min_substep: Real,
     /// Contacts at the end of the frame.
     pub contacts: u32,
+    /// Sub-frames the body moved in (set by the pipeline; the most over accumulated reports).
+    pub body_parts: u32,
 }
 
 impl StepReport {
@@ -59,6 +61,7 @@ impl StepReport {
             self.min_substep.min(o.min_substep)
         };
         self.contacts = o.contacts;
+        self.body_parts = self.body_parts.max(o.body_parts);
     }
 }
 

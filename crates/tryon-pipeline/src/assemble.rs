@@ -104,6 +104,7 @@ impl Pipeline {
             frames,
             fps,
             grab,
+            end_shape: Vec::new(),
         })
     }
 }

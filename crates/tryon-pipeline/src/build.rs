@@ -268,6 +268,7 @@ pub fn cloth_params(scene: &Scene, garment: &PolyMesh) -> Result<ClothParams, As
     if let Some(r) = c.stretch_guard {
         p.stretch_guard = (r > 0.0).then_some(r);
     }
+    set(&mut p.rest_scale, c.rest_scale);
     p.gravity = if fx.gravity {
         tryon_core::math::GRAVITY
     } else {
@@ -295,8 +296,8 @@ pub fn solver(
             let mut p = cloth_params(scene, garment)?;
             // XPBD's edges are inextensible: a garment cut 5% small (P1's worn-under-tension
             // rest scale) would be torn between its edges and the body (stretch 2.0 by frame 3 on
-            // makehuman-dress-walk); it is worn at its modelled size.
-            p.rest_scale = 1.0;
+            // makehuman-dress-walk); it is worn at its modelled size unless the scene says.
+            p.rest_scale = scene.cloth.rest_scale.unwrap_or(1.0);
             let model = ClothModel::build_with_kinematic(garment, &p, handles, kinematic)?;
             let c = &scene.cloth;
             let x = XpbdParams {

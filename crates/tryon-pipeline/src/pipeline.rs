@@ -17,6 +17,15 @@ use tryon_core::stages::{
     SurfaceStage, Untimed,
 };
 
+/// Farthest a body vertex may move between two collider updates unless a scene says otherwise
+/// (m). Only the body near the cloth counts. A walk at 30 fps is left at one update; 131_01's
+/// lunges and arm swings (up to 30 cm a frame) get up to four. Smaller steps were tried: 4 cm
+/// splits the demo's walk too and doubles its cloth time (every sub-frame pays the strap's
+/// stretch-guard retries: 49 -> 333) with no gain in penetration.
+pub const BODY_STEP: Real = 0.08;
+/// Most sub-frames a frame is split into for a fast body.
+pub const MAX_BODY_PARTS: usize = 8;
+
 /// A scene ready to run: the stage objects and the state they share between frames.
 pub struct Pipeline {
     pub scene: Scene,
@@ -51,6 +60,8 @@ pub struct Pipeline {
     pub fps: Real,
     /// A grab still to happen (`[garment] grab`).
     pub grab: Option<Grab>,
+    /// Scratch: the body's shape at the end of the frame being stepped.
+    pub end_shape: Vec<Vec3>,
 }
 
 impl std::fmt::Debug for Pipeline {
@@ -172,7 +183,9 @@ impl Pipeline {
 
     /// The coarse part of the output frame ending at time `t`: motion, skinning, following,
     /// collider update, bands, grab, the cloth step and attached pieces (each timed into
-    /// `timers`). The referee is not run here.
+    /// `timers`). The referee is not run here. A body that moves far within the frame is moved
+    /// in sub-frames (its pose sampled between the frames), each followed by a cloth step, so
+    /// that no body vertex moves more than [`BODY_STEP`] between two collider updates.
     pub fn advance_coarse(
         &mut self,
         st: &mut LoopState,
@@ -180,6 +193,70 @@ impl Pipeline {
         timers: &mut Timers,
     ) -> StepReport {
         let dt = 1.0 / self.fps;
+        let parts = self.body_parts(st, t, timers);
+        let mut report = StepReport::default();
+        for i in 1..=parts {
+            let ti = t - dt + dt * i as Real / parts as Real;
+            report.accumulate(&self.advance_part(st, ti, dt / parts as Real, timers));
+        }
+        report.body_parts = parts as u32;
+        if !self.attachments.is_empty() {
+            timers.time("attach_pieces", || {
+                garment_fit::apply_attachments(
+                    &self.attachments,
+                    &mut self.cloth.positions,
+                    &mut self.cloth.velocities,
+                )
+            });
+        }
+        report
+    }
+
+    /// How many sub-frames the body needs to reach its pose at `t` moving no vertex near the
+    /// cloth more than `[scene] body_step` in one (1 for a body that holds still; at most
+    /// [`MAX_BODY_PARTS`]).
+    fn body_parts(&mut self, st: &LoopState, t: Real, timers: &mut Timers) -> usize {
+        let step = self.scene.scene.body_step;
+        let Some(motion) = self.motion.as_ref().filter(|_| step > 0.0) else {
+            return 1;
+        };
+        let settle = self.scene.scene.settle;
+        let (body, end) = (&self.body, &mut self.end_shape);
+        timers.time("skinning", || {
+            let mut pose = st.pose.clone();
+            motion.sample((t - settle).max(0.0), &mut pose);
+            body.shape_at(&pose, end);
+        });
+        // Only the body near the cloth counts (a dress does not care how fast the feet move): its
+        // vertices inside the cloth's bounding box grown by a tenth of a metre.
+        let (mut lo, mut hi) = (Vec3::repeat(Real::INFINITY), Vec3::repeat(-Real::INFINITY));
+        for p in &self.cloth.positions {
+            lo = lo.inf(p);
+            hi = hi.sup(p);
+        }
+        let (lo, hi) = (lo.add_scalar(-0.1), hi.add_scalar(0.1));
+        let near = |p: &Vec3| (0..3).all(|k| p[k] >= lo[k] && p[k] <= hi[k]);
+        let far = end
+            .iter()
+            .zip(&st.body_frame.positions)
+            .filter(|(_, b)| near(b))
+            .map(|(a, b)| (a - b).norm_squared())
+            .fold(0.0, Real::max)
+            .sqrt();
+        if !far.is_finite() {
+            return 1;
+        }
+        ((far / step).ceil() as usize).clamp(1, MAX_BODY_PARTS)
+    }
+
+    /// One sub-frame ending at `t`, `dt` long: the body posed at `t`, then the cloth stepped.
+    fn advance_part(
+        &mut self,
+        st: &mut LoopState,
+        t: Real,
+        dt: Real,
+        timers: &mut Timers,
+    ) -> StepReport {
         let settle = self.scene.scene.settle;
         let LoopState { body_frame, pose } = st;
         if let Some(motion) = &mut self.motion {
@@ -220,15 +297,6 @@ impl Pipeline {
         };
         let (solver, cloth) = (&mut self.solver, &mut self.cloth);
         let report = timers.time("cloth", || solver.step_frame(cloth, dt, collider));
-        if !self.attachments.is_empty() {
-            timers.time("attach_pieces", || {
-                garment_fit::apply_attachments(
-                    &self.attachments,
-                    &mut cloth.positions,
-                    &mut cloth.velocities,
-                )
-            });
-        }
         if let Some(f) = &mut self.follower {
             timers.time("follow_body", || f.record(&cloth.positions));
         }
@@ -237,6 +305,7 @@ impl Pipeline {
 
     /// One output frame ending at time `t`: [`Pipeline::advance_coarse`], then the surface stages
     /// on its result.
+
     pub fn advance(&mut self, st: &mut LoopState, t: Real, timers: &mut Timers) -> StepReport {
         let report = self.advance_coarse(st, t, timers);
         let input = SurfaceInput {

@@ -57,6 +57,8 @@ pub struct Metrics {
     pub non_finite_events: u32,
     pub substep_retries: u32,
     pub rollbacks: u32,
+    /// Most sub-frames a frame's body motion was split into (`[scene] body_step`).
+    pub max_body_parts: u32,
     /// Mean over frames of the length restoration error over compressed coarse edges,
     /// |fine path length - rest| / rest (when the scene refines).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -78,6 +80,8 @@ pub struct FrameStats {
     pub detached_share: Real,
     pub contacts: u32,
     pub retries: u32,
+    /// Sub-frames the body moved in.
+    pub body_parts: u32,
 }
 
 /// Everything stats.json holds.
@@ -297,6 +301,7 @@ impl Pipeline {
                     detached_share: pen.detached_share,
                     contacts: report.contacts,
                     retries: report.retries,
+                    body_parts: report.body_parts,
                 });
             }
             sink.frame(&FrameRecord {
@@ -314,6 +319,7 @@ impl Pipeline {
         stats.metrics.non_finite_events = total.non_finite_events;
         stats.metrics.substep_retries = total.retries;
         stats.metrics.rollbacks = total.rollbacks;
+        stats.metrics.max_body_parts = total.body_parts;
         if refines {
             stats.metrics.length_error = Some(length_sum / length_frames.max(1) as Real);
         }

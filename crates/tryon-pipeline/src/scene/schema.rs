@@ -30,6 +30,11 @@ pub struct SceneSection {
     /// Run frame n+1's coarse step and frame n's surface stages at the same time (two threads;
     /// the same frames).
     pub pipelined: bool,
+    /// Farthest a body vertex may move between two collision updates (m): a frame in which the
+    /// body moves farther is stepped in sub-frames, the body posed between the frames; 0 = one
+    /// update per frame.
+    #[schemars(range(min = 0.0, max = 1.0))]
+    pub body_step: Real,
 }
 
 impl Default for SceneSection {
@@ -40,6 +45,7 @@ impl Default for SceneSection {
             duration: None,
             settle: 0.3,
             pipelined: false,
+            body_step: crate::pipeline::BODY_STEP,
         }
     }
 }

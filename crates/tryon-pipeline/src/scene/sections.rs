@@ -47,6 +47,10 @@ pub struct ClothSection {
     /// Quality guard: a substep that stretches a structural edge past this ratio of its rest
     /// length is retried at half the step, a ratio in (1, 10]; 0 turns it off.
     pub stretch_guard: Option<Real>,
+    /// Rest lengths as a share of the modelled ones (below 1 the garment is worn under tension;
+    /// the preset's when absent: 0.95 for .mhclo garments with `p1`, 1 otherwise).
+    #[schemars(range(min = 0.5, max = 1.5))]
+    pub rest_scale: Option<Real>,
     /// Distance the cloth keeps from the body (m).
     #[schemars(range(min = 0.0, max = 0.05))]
     pub thickness: Real,
@@ -85,6 +89,7 @@ impl Default for ClothSection {
             max_strain: None,
             strain_iterations: None,
             stretch_guard: None,
+            rest_scale: None,
             thickness: presets::THICKNESS,
             xpbd_substep: xpbd.substep,
             xpbd_iterations: xpbd.iterations,
