@@ -299,7 +299,7 @@ fn a_fast_body_is_moved_in_sub_frames_near_the_cloth_only() {
         "131_01 on the mannequin: {} of 90 frames split, at most {most} parts",
         split.iter().filter(|&&n| n > 1).count()
     );
-    assert!(most >= 2 && most <= 8, "{split:?}");
+    assert!((2..=8).contains(&most), "{split:?}");
     assert!(split.iter().all(|&n| n >= 1));
     assert!(parts(text(clip, "0"), 30).iter().all(|&n| n == 1));
     assert!(

@@ -305,7 +305,6 @@ impl Pipeline {
 
     /// One output frame ending at time `t`: [`Pipeline::advance_coarse`], then the surface stages
     /// on its result.
-
     pub fn advance(&mut self, st: &mut LoopState, t: Real, timers: &mut Timers) -> StepReport {
         let report = self.advance_coarse(st, t, timers);
         let input = SurfaceInput {
