@@ -17,12 +17,14 @@ pub mod params;
 pub mod presets;
 pub mod solver;
 pub mod strain;
+pub mod vbd;
 pub mod xpbd;
 
 pub use integrator::{Derivative, Integrator, IntegratorKind, Rk4, SymplecticEuler};
 pub use model::{BuildClothError, ClothModel, Handle, SpringKind, SpringSet};
 pub use params::ClothParams;
 pub use solver::ClothSim;
+pub use vbd::{VbdParams, VbdSim};
 pub use xpbd::{XpbdParams, XpbdSim};
 
 #[cfg(test)]

@@ -11,8 +11,8 @@ use body_collide::{
 };
 use body_model::{Mannequin, SkinnedBody};
 use cloth_dyn::{
-    BuildClothError, ClothModel, ClothParams, ClothSim, Handle, IntegratorKind, XpbdParams,
-    XpbdSim, presets,
+    BuildClothError, ClothModel, ClothParams, ClothSim, Handle, IntegratorKind, VbdParams, VbdSim,
+    XpbdParams, XpbdSim, presets,
 };
 use garment_fit::{DressParams, PatternError, SkirtParams};
 use mocap_retarget::{ArmRaise, ClipError, Walk, WalkParams};
@@ -308,6 +308,20 @@ pub fn solver(
                 static_friction: c.static_friction,
             };
             Box::new(XpbdSim::new(model, p, x))
+        }
+        SolverName::Vbd => {
+            let mut p = cloth_params(scene, garment)?;
+            p.rest_scale = scene.cloth.rest_scale.unwrap_or(1.0);
+            let model = ClothModel::build_with_kinematic(garment, &p, handles, kinematic)?;
+            let c = &scene.cloth;
+            let v = VbdParams {
+                substep: c.vbd_substep,
+                iterations: c.vbd_iterations,
+                stretch: c.vbd_stretch,
+                contact: c.vbd_contact,
+                ..VbdParams::default()
+            };
+            Box::new(VbdSim::new(model, p, v, c.thickness))
         }
     })
 }

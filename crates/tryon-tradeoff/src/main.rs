@@ -10,7 +10,7 @@
 //! (e) P4's scene: fine penetration with and without the depth-map correction, and what running
 //!     the coarse step and the fine correction at the same time gains;
 //! (f) the stretch guard on the demo walk;
-//! (g) the garment solvers (P1, XPBD) on every scene.
+//! (g) the garment solvers (P1, XPBD, VBD) on every scene.
 //!
 //! Writes `report.md`, `results.json`-like tables and SVG plots (Pareto fronts marked) under the
 //! output folder, and a short summary (`--summary FILE`). `--quick` runs few frames and checks

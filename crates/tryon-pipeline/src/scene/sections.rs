@@ -70,11 +70,24 @@ pub struct ClothSection {
     /// `effects.friction`).
     #[schemars(range(min = 0.0, max = 5.0))]
     pub static_friction: Real,
+    /// The `vbd` solver's longest step (s).
+    #[schemars(range(min = 1e-5, max = 0.1))]
+    pub vbd_substep: Real,
+    /// The `vbd` solver's descent sweeps per step.
+    #[schemars(range(min = 1, max = 1000))]
+    pub vbd_iterations: u32,
+    /// The `vbd` solver's stretch and shear stiffness (N/m times rest length).
+    #[schemars(range(min = 1.0, max = 1e9))]
+    pub vbd_stretch: Real,
+    /// The `vbd` solver's contact stiffness (N/m).
+    #[schemars(range(min = 1.0, max = 1e9))]
+    pub vbd_contact: Real,
 }
 
 impl Default for ClothSection {
     fn default() -> Self {
         let xpbd = cloth_dyn::XpbdParams::default();
+        let vbd = cloth_dyn::VbdParams::default();
         ClothSection {
             solver: SolverName::default(),
             integrator: IntegratorName::default(),
@@ -96,6 +109,10 @@ impl Default for ClothSection {
             stretch_compliance: xpbd.stretch_compliance,
             bend_compliance: xpbd.bend_compliance,
             static_friction: xpbd.static_friction,
+            vbd_substep: vbd.substep,
+            vbd_iterations: vbd.iterations,
+            vbd_stretch: vbd.stretch,
+            vbd_contact: vbd.contact,
         }
     }
 }
@@ -111,6 +128,9 @@ pub enum SolverName {
     /// Extended position-based dynamics with small substeps (cloth-dyn's `XpbdSim`): distance
     /// and dihedral constraints with compliance, body contact and friction inside every substep.
     Xpbd,
+    /// Vertex block descent (cloth-dyn's `VbdSim`): the implicit step's energy (inertia, springs,
+    /// body contact with friction) minimised vertex by vertex, colour by colour.
+    Vbd,
 }
 
 /// A way of colliding with the body. Adding one: a variant here and its arm in

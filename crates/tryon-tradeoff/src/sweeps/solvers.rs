@@ -1,4 +1,4 @@
-//! (g) The garment solvers on every scene: P1's particle cloth against XPBD, each scene's own
+//! (g) The garment solvers on every scene: P1's particle cloth against XPBD and VBD, each scene's own
 //! settings otherwise (`[cloth] solver`).
 
 use super::*;
@@ -31,7 +31,7 @@ const SCENES: [(&str, Option<usize>); 7] = [
 pub(super) fn solver_sweep(quick: bool, log: &mut String) -> Result<Vec<SolverPoint>, String> {
     let mut out = Vec::new();
     for (file, quick_frames) in SCENES {
-        for solver in ["p1", "xpbd"] {
+        for solver in ["p1", "xpbd", "vbd"] {
             let frames = if quick { quick_frames } else { None };
             let sets = vec![format!("cloth.solver=\"{solver}\"")];
             let (s, _) = run_scene(file, &sets, frames)?;
@@ -68,7 +68,7 @@ pub(super) fn section(r: &mut String, points: &[SolverPoint]) {
     let _ = writeln!(r, "\n## (g) Garment solvers on every scene\n");
     let _ = writeln!(
         r,
-        "`[cloth] solver`: P1's particle cloth (RK4, strain limit) against XPBD (small substeps, contact and friction inside each). Penetration by the exact referee over the output surface, stretch over the coarse structural edges.\n"
+        "`[cloth] solver`: P1's particle cloth (RK4, strain limit) against XPBD (small substeps, contact and friction inside each) and VBD (vertex block descent of the implicit step's energy, contact and friction as energies). Penetration by the exact referee over the output surface, stretch over the coarse structural edges.\n"
     );
     let _ = writeln!(
         r,
