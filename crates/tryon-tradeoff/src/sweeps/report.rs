@@ -223,7 +223,7 @@ pub fn run_all(quick: bool, out: &Path, summary: Option<&Path>) -> Result<(), St
     if guard.len() != 3 {
         empty.push("stretch guard".into());
     }
-    if solvers.len() != 14 {
+    if solvers.len() != super::solvers::POINTS {
         empty.push("solvers".into());
     }
 

@@ -28,10 +28,15 @@ const SCENES: [(&str, Option<usize>); 7] = [
     ("makehuman-casual-131.toml", Some(4)),
 ];
 
+/// The solvers compared.
+const SOLVERS: [&str; 3] = ["p1", "xpbd", "vbd"];
+/// Points a complete sweep makes.
+pub(super) const POINTS: usize = SCENES.len() * SOLVERS.len();
+
 pub(super) fn solver_sweep(quick: bool, log: &mut String) -> Result<Vec<SolverPoint>, String> {
     let mut out = Vec::new();
     for (file, quick_frames) in SCENES {
-        for solver in ["p1", "xpbd", "vbd"] {
+        for solver in SOLVERS {
             let frames = if quick { quick_frames } else { None };
             let sets = vec![format!("cloth.solver=\"{solver}\"")];
             let (s, _) = run_scene(file, &sets, frames)?;
