@@ -15,6 +15,7 @@ pub mod lines;
 pub mod model;
 pub mod params;
 pub mod presets;
+pub mod retry;
 pub mod solver;
 pub mod strain;
 pub mod vbd;

@@ -14,6 +14,7 @@ pub mod colour;
 
 use crate::model::{ClothModel, Handle};
 use crate::params::ClothParams;
+use crate::retry::frame_with_retries;
 use crate::strain::Tethers;
 use tryon_core::frames::{CoarseFrame, Contact, StepReport};
 use tryon_core::math::{Mat3, Real, Vec3, is_finite};
@@ -91,8 +92,7 @@ pub struct VbdSim {
     probes: Vec<Probe>,
     all: Vec<u32>,
     contacts: Vec<Contact>,
-    backup_x: Vec<Vec3>,
-    backup_v: Vec<Vec3>,
+    backup: (Vec<Vec3>, Vec<Vec3>),
     tethers: Tethers,
     tethers_stale: bool,
 }
@@ -149,8 +149,7 @@ impl VbdSim {
             probes: Vec::new(),
             all: (0..n as u32).collect(),
             contacts: Vec::new(),
-            backup_x: z.clone(),
-            backup_v: z,
+            backup: (z.clone(), z),
             tethers: Tethers::default(),
             tethers_stale: true,
         }
@@ -323,47 +322,23 @@ impl ClothSolver for VbdSim {
         dt: Real,
         collider: &mut dyn Collider,
     ) -> StepReport {
-        let mut report = StepReport::default();
         let bad_input = self.model.sanitize(frame);
+        if !(dt.is_finite() && dt > 0.0) {
+            return StepReport {
+                rollbacks: bad_input,
+                non_finite_events: bad_input,
+                ..StepReport::default()
+            };
+        }
+        let steps = (dt / self.vbd.substep).ceil().max(1.0) as usize;
+        let max_speed = self.params.max_speed;
+        let mut backup = std::mem::take(&mut self.backup);
+        let mut report = frame_with_retries(frame, dt, steps, max_speed, &mut backup, |f, t, h| {
+            self.step(f, t, h, collider)
+        });
+        self.backup = backup;
         report.rollbacks += bad_input;
         report.non_finite_events += bad_input;
-        if !(dt.is_finite() && dt > 0.0) {
-            return report;
-        }
-        self.backup_x.clone_from(&frame.positions);
-        self.backup_v.clone_from(&frame.velocities);
-        let t0 = frame.time;
-        let mut n = (dt / self.vbd.substep).ceil().max(1.0) as usize;
-        for attempt in 0..3 {
-            let h = dt / n as Real;
-            let mut worst = 0;
-            for s in 0..n {
-                worst = worst.max(self.step(frame, t0 + s as Real * h, h, collider));
-            }
-            report.substeps += n as u32;
-            report.min_substep = h;
-            if worst == 0 {
-                break;
-            }
-            report.non_finite_events +=
-                frame.positions.iter().filter(|p| !is_finite(p)).count() as u32;
-            if attempt == 2 {
-                for i in 0..frame.positions.len() {
-                    let (x, v) = (frame.positions[i], frame.velocities[i]);
-                    if !is_finite(&x) || !(v.norm() <= self.params.max_speed) {
-                        frame.positions[i] = self.backup_x[i];
-                        frame.velocities[i] = Vec3::zeros();
-                        report.rollbacks += 1;
-                    }
-                }
-                break;
-            }
-            report.retries += 1;
-            frame.positions.clone_from(&self.backup_x);
-            frame.velocities.clone_from(&self.backup_v);
-            n *= 2;
-        }
-        frame.time = t0 + dt;
         frame.contacts.clone_from(&self.contacts);
         report.contacts = frame.contacts.len() as u32;
         report

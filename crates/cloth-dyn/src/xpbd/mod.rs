@@ -12,6 +12,7 @@ pub mod constraints;
 
 use crate::model::{ClothModel, Handle};
 use crate::params::ClothParams;
+use crate::retry::frame_with_retries;
 use crate::strain::Tethers;
 use constraints::{Edge, Hinge, colour, dihedral};
 use std::collections::HashMap;
@@ -61,8 +62,7 @@ pub struct XpbdSim {
     hinges: Vec<Hinge>,
     hinge_colours: Vec<Range<usize>>,
     prev: Vec<Vec3>,
-    backup_x: Vec<Vec3>,
-    backup_v: Vec<Vec3>,
+    backup: (Vec<Vec3>, Vec<Vec3>),
     elastic: Vec<Vec3>,
     contacts: Vec<Contact>,
     tethers: Tethers,
@@ -128,8 +128,7 @@ impl XpbdSim {
             hinges,
             hinge_colours,
             prev: z.clone(),
-            backup_x: z.clone(),
-            backup_v: z.clone(),
+            backup: (z.clone(), z.clone()),
             elastic: z,
             contacts: Vec::new(),
             tethers: Tethers::default(),
@@ -287,23 +286,6 @@ impl XpbdSim {
         }
         bad
     }
-
-    /// The whole frame in `n` substeps; returns the bad particles of the worst substep.
-    fn frame_in(
-        &mut self,
-        frame: &mut CoarseFrame,
-        dt: Real,
-        n: usize,
-        collider: &mut dyn Collider,
-    ) -> u32 {
-        let h = dt / n as Real;
-        let mut worst = 0;
-        for s in 0..n {
-            let bad = self.substep(frame, frame.time + s as Real * h, h, s + 1 == n, collider);
-            worst = worst.max(bad);
-        }
-        worst
-    }
 }
 
 impl ClothSolver for XpbdSim {
@@ -322,46 +304,26 @@ impl ClothSolver for XpbdSim {
         dt: Real,
         collider: &mut dyn Collider,
     ) -> StepReport {
-        let mut report = StepReport::default();
         let bad_input = self.model.sanitize(frame);
+        if !(dt.is_finite() && dt > 0.0) {
+            return StepReport {
+                rollbacks: bad_input,
+                non_finite_events: bad_input,
+                ..StepReport::default()
+            };
+        }
+        let steps = (dt / self.xpbd.substep).ceil().max(1.0) as usize;
+        let max_speed = self.params.max_speed;
+        let end = frame.time + dt;
+        let mut backup = std::mem::take(&mut self.backup);
+        let mut report = frame_with_retries(frame, dt, steps, max_speed, &mut backup, |f, t, h| {
+            // The frame's last substep records the elastic forces.
+            let last = t + 1.5 * h > end;
+            self.substep(f, t, h, last, collider)
+        });
+        self.backup = backup;
         report.rollbacks += bad_input;
         report.non_finite_events += bad_input;
-        if !(dt.is_finite() && dt > 0.0) {
-            return report;
-        }
-        self.backup_x.clone_from(&frame.positions);
-        self.backup_v.clone_from(&frame.velocities);
-        let t0 = frame.time;
-        let mut n = (dt / self.xpbd.substep).ceil().max(1.0) as usize;
-        // A frame that went bad is redone with twice the substeps, twice; then the offending
-        // particles are rolled back.
-        for attempt in 0..3 {
-            let bad = self.frame_in(frame, dt, n, collider);
-            report.substeps += n as u32;
-            report.min_substep = dt / n as Real;
-            if bad == 0 {
-                break;
-            }
-            report.non_finite_events +=
-                frame.positions.iter().filter(|p| !is_finite(p)).count() as u32;
-            if attempt == 2 {
-                for i in 0..frame.positions.len() {
-                    let (x, v) = (frame.positions[i], frame.velocities[i]);
-                    if !is_finite(&x) || !(v.norm() <= self.params.max_speed) {
-                        frame.positions[i] = self.backup_x[i];
-                        frame.velocities[i] = Vec3::zeros();
-                        report.rollbacks += 1;
-                    }
-                }
-                break;
-            }
-            report.retries += 1;
-            frame.positions.clone_from(&self.backup_x);
-            frame.velocities.clone_from(&self.backup_v);
-            frame.time = t0;
-            n *= 2;
-        }
-        frame.time = t0 + dt;
         frame.elastic_force.clone_from(&self.elastic);
         frame.contacts.clone_from(&self.contacts);
         report.contacts = frame.contacts.len() as u32;
