@@ -313,6 +313,18 @@ impl ClothModel {
         f
     }
 
+    /// Makes `handle`'s particle kinematic, driven along its path; false (nothing changed) for a
+    /// particle out of range or an empty path.
+    pub fn take_handle(&mut self, handle: Handle) -> bool {
+        let p = handle.particle as usize;
+        if p >= self.particle_count() || handle.path.is_empty() {
+            return false;
+        }
+        self.inv_mass[p] = 0.0;
+        self.handles.push(handle);
+        true
+    }
+
     /// Holds handles `first..` at `targets` from now on (non-finite targets are skipped).
     pub fn hold_handles(&mut self, first: usize, targets: &[Vec3]) {
         for (h, p) in self.handles.iter_mut().skip(first).zip(targets) {

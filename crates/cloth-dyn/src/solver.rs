@@ -143,13 +143,10 @@ impl ClothSim {
     /// it stops responding to forces, and tethers are recomputed.
     pub fn grab(&mut self, handle: Handle) {
         let p = handle.particle as usize;
-        if p >= self.model.particle_count() || handle.path.is_empty() {
-            return;
+        if self.model.take_handle(handle) {
+            self.free_mass[p] = 0.0;
+            self.tethers_stale = true;
         }
-        self.model.inv_mass[p] = 0.0;
-        self.free_mass[p] = 0.0;
-        self.model.handles.push(handle);
-        self.tethers_stale = true;
     }
 
     /// The substep used when nothing goes wrong (s).

@@ -305,25 +305,17 @@ impl ClothSolver for XpbdSim {
         collider: &mut dyn Collider,
     ) -> StepReport {
         let bad_input = self.model.sanitize(frame);
-        if !(dt.is_finite() && dt > 0.0) {
-            return StepReport {
-                rollbacks: bad_input,
-                non_finite_events: bad_input,
-                ..StepReport::default()
-            };
-        }
-        let steps = (dt / self.xpbd.substep).ceil().max(1.0) as usize;
-        let max_speed = self.params.max_speed;
+        let (longest, max_speed) = (self.xpbd.substep, self.params.max_speed);
         let end = frame.time + dt;
         let mut backup = std::mem::take(&mut self.backup);
-        let mut report = frame_with_retries(frame, dt, steps, max_speed, &mut backup, |f, t, h| {
+        let step = |f: &mut CoarseFrame, t: Real, h: Real| {
             // The frame's last substep records the elastic forces.
             let last = t + 1.5 * h > end;
             self.substep(f, t, h, last, collider)
-        });
+        };
+        let mut report =
+            frame_with_retries(frame, dt, longest, max_speed, bad_input, &mut backup, step);
         self.backup = backup;
-        report.rollbacks += bad_input;
-        report.non_finite_events += bad_input;
         frame.elastic_force.clone_from(&self.elastic);
         frame.contacts.clone_from(&self.contacts);
         report.contacts = frame.contacts.len() as u32;
@@ -335,13 +327,9 @@ impl ClothSolver for XpbdSim {
     }
 
     fn grab(&mut self, handle: Handle) {
-        let p = handle.particle as usize;
-        if p >= self.model.particle_count() || handle.path.is_empty() {
-            return;
+        if self.model.take_handle(handle) {
+            self.tethers_stale = true;
         }
-        self.model.inv_mass[p] = 0.0;
-        self.model.handles.push(handle);
-        self.tethers_stale = true;
     }
 }
 
