@@ -12,10 +12,15 @@
 
 pub mod colour;
 
+/// Fewest vertices a thread takes at once in a colour's sweep: below this the hand-over costs more
+/// than the Newton steps it shares out.
+const PAR_CHUNK: usize = 32;
+
 use crate::model::{ClothModel, Handle};
 use crate::params::ClothParams;
 use crate::retry::frame_with_retries;
 use crate::strain::Tethers;
+use rayon::prelude::*;
 use tryon_core::frames::{CoarseFrame, Contact, StepReport};
 use tryon_core::math::{Mat3, Real, Vec3, is_finite};
 use tryon_core::stages::{ClothInfo, ClothSolver, Collider, Probe};
@@ -95,6 +100,8 @@ pub struct VbdSim {
     backup: (Vec<Vec3>, Vec<Vec3>),
     tethers: Tethers,
     tethers_stale: bool,
+    /// Each colour's steps before they are applied.
+    dx: Vec<Vec3>,
 }
 
 impl VbdSim {
@@ -152,6 +159,7 @@ impl VbdSim {
             backup: (z.clone(), z),
             tethers: Tethers::default(),
             tethers_stale: true,
+            dx: Vec::new(),
         }
     }
 
@@ -260,21 +268,37 @@ impl VbdSim {
             self.tethers.compute(&self.model);
             self.tethers_stale = false;
         }
+        let mut dx = std::mem::take(&mut self.dx);
         for _ in 0..self.vbd.iterations.max(1) {
             for r in self.colours.clone() {
-                for k in r {
-                    let i = self.order[k] as usize;
-                    if self.model.inv_mass[i] == 0.0 {
-                        continue;
-                    }
-                    let dx = self.descend(x, i, h);
-                    if is_finite(&dx) {
-                        x[i] += dx;
-                    }
-                }
+                self.sweep_colour(x, &self.order[r], h, &mut dx);
             }
             if tethers {
                 self.tethers.project(1.0, x);
+            }
+        }
+        self.dx = dx;
+    }
+
+    /// One Newton step on every vertex of one colour: the steps are found in parallel (no two
+    /// vertices of a colour share a spring, so each reads only vertices it does not write) and
+    /// applied after, so the result is the same for any number of threads.
+    fn sweep_colour(&self, x: &mut [Vec3], ids: &[u32], h: Real, dx: &mut Vec<Vec3>) {
+        dx.clear();
+        dx.resize(ids.len(), Vec3::zeros());
+        let xs: &[Vec3] = x;
+        dx.par_iter_mut()
+            .with_min_len(PAR_CHUNK)
+            .zip(ids.par_iter())
+            .for_each(|(d, &i)| {
+                let i = i as usize;
+                if self.model.inv_mass[i] != 0.0 {
+                    *d = self.descend(xs, i, h);
+                }
+            });
+        for (d, &i) in dx.iter().zip(ids) {
+            if is_finite(d) {
+                x[i as usize] += d;
             }
         }
     }

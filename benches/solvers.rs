@@ -1,0 +1,100 @@
+//! Criterion benchmarks of the garment solvers' cloth step alone (`ClothSolver::step_frame`), on one
+//! thread and on two: VBD on the drape at N = 64 and 128, and on the MakeHuman walk (skipped when
+//! the shared assets are absent). Each scene is run untimed to a frame in contact (the drape after
+//! 1 s, the walk at frame 30); every timed iteration then steps that same frame from the same cloth
+//! state against the same body, so one and two threads do the same work. The VBD sweep gives the
+//! same result for any thread count (tests: `vbd_is_the_same_on_any_thread_count`).
+
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use std::path::Path;
+use std::time::{Duration, Instant};
+use tryon_core::stages::Collider;
+use tryon_pipeline::run::Timers;
+use tryon_pipeline::{Pipeline, Scene};
+
+/// A scene of data/scenes with overrides, run untimed for `frames` frames.
+fn ready(file: &str, sets: &[&str], frames: usize) -> Option<Pipeline> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../data/scenes")
+        .join(file);
+    let mut sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    sets.push("effects.refine=0".into());
+    let scene = match Scene::load_with_overrides(&path, &sets) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("skipped {file}: {e}");
+            return None;
+        }
+    };
+    let mut p = match Pipeline::new(scene) {
+        Ok(p) => p,
+        Err(e) => {
+            eprintln!("skipped {file}: {e}");
+            return None;
+        }
+    };
+    let mut st = p.start();
+    let mut timers = Timers::default();
+    for k in 1..=frames {
+        p.advance(&mut st, p.frame_time(k), &mut timers);
+    }
+    Some(p)
+}
+
+fn cloth_step(c: &mut Criterion) {
+    let mut group = c.benchmark_group("cloth_step");
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(4));
+    let cases: [(&str, &str, &[&str], usize); 3] = [
+        (
+            "vbd_drape_64",
+            "drape-sphere.toml",
+            &["cloth.solver=\"vbd\"", "garment.particles=64"],
+            60,
+        ),
+        (
+            "vbd_drape_128",
+            "drape-sphere.toml",
+            &["cloth.solver=\"vbd\"", "garment.particles=128"],
+            60,
+        ),
+        ("vbd_makehuman_walk", "makehuman-dress-walk.toml", &[], 30),
+    ];
+    for (name, file, sets, frames) in cases {
+        let Some(mut p) = ready(file, sets, frames) else {
+            continue;
+        };
+        let dt = 1.0 / p.fps;
+        let start = p.cloth.clone();
+        for threads in [1usize, 2] {
+            let Ok(pool) = rayon::ThreadPoolBuilder::new().num_threads(threads).build() else {
+                continue;
+            };
+            group.bench_with_input(BenchmarkId::new(name, threads), &threads, |b, _| {
+                b.iter_custom(|iters| {
+                    let mut total = Duration::ZERO;
+                    for _ in 0..iters {
+                        p.cloth.clone_from(&start);
+                        let (solver, cloth) = (&mut p.solver, &mut p.cloth);
+                        let collider: Option<&mut dyn Collider> = p.collider.as_deref_mut();
+                        let Some(collider) = collider else {
+                            continue;
+                        };
+                        let t = Instant::now();
+                        pool.install(|| {
+                            std::hint::black_box(solver.step_frame(cloth, dt, collider))
+                        });
+                        total += t.elapsed();
+                    }
+                    total
+                })
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, cloth_step);
+criterion_main!(benches);
