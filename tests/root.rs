@@ -299,3 +299,39 @@ fn a_centred_drape_stays_centred_and_settles() {
         "centroid at {last_height}"
     );
 }
+
+/// Between two legs the nearest vertex of one leg is a local minimum of the distance for a point
+/// inside the other: P1's hill-climb alone stays on the first leg and calls the point outside (the
+/// skirt hem of makehuman-dress-walk went 43 mm into a calf this way). The collider's probes (the
+/// VBD solver's contact planes) check the climb against a spatial hash of the body's vertices.
+#[test]
+fn a_point_inside_one_leg_is_found_while_its_track_is_on_the_other() {
+    use tryon_core::stages::Collider;
+    let body = body_model::Mannequin::new(&Default::default()).unwrap();
+    let mesh = &body.mesh;
+    let referee = ExactCollider::new(mesh, 0.0).unwrap();
+    // The calves at 0.35 m: the innermost vertex of each leg (+x one leg, -x the other).
+    let near = |side: Real| {
+        mesh.positions
+            .iter()
+            .filter(|p| (p.y - 0.35).abs() < 0.03 && p.x * side > 0.0)
+            .min_by(|a, b| (a.x * side).total_cmp(&(b.x * side)))
+            .copied()
+            .unwrap()
+    };
+    let (left, right) = (near(1.0), near(-1.0));
+    assert!(left.x - right.x > 0.03, "the legs touch: {left} {right}");
+    // Inside the -x calf by 2 cm, found from a track that starts at the +x calf's inner side.
+    let inside = right + Vec3::new(-0.02, 0.0, 0.0);
+    assert!(referee.signed_distance(&inside).unwrap() < -0.01);
+    let mut c = NearestVertexCollider::new(mesh, 0.002).unwrap();
+    let mut out = Vec::new();
+    let mut points = vec![left + Vec3::new(-0.005, 0.0, 0.0)];
+    c.probe_near(&points, &[0], 0.05, &mut out);
+    assert!(out[0].distance > 0.0, "outside the +x calf: {:?}", out[0]);
+    points[0] = inside;
+    c.probe_near(&points, &[0], 0.05, &mut out);
+    assert!(out[0].distance < -0.01, "probe: {:?}", out[0]);
+    // The -x calf's inner side faces +x: out of the calf, not on through it.
+    assert!(out[0].normal.x > 0.5, "normal {}", out[0].normal);
+}

@@ -1,6 +1,7 @@
 //! The body's triangle mesh with the topology the colliders need, and its per-frame shape
 //! (positions, face normals, velocities).
 
+use crate::grid::VertexGrid;
 use thiserror::Error;
 use tryon_core::frames::BodyFrame;
 use tryon_core::math::{Real, Vec3, closest_point_on_triangle};
@@ -17,6 +18,11 @@ pub enum BodyError {
     VertexCount { got: usize, expected: usize },
 }
 
+/// How far from a point [`BodyMesh::nearest_vertex`] looks for a nearer vertex than the climb
+/// found (m), and the hash's cell size: a point nearer the body than this (the cloth's contact
+/// reach is 3 cm plus the thickness) always gets its true nearest vertex.
+pub const SNAP_REACH: Real = 0.05;
+
 /// A body triangle mesh, its topology, and its current shape.
 #[derive(Clone, Debug)]
 pub struct BodyMesh {
@@ -31,6 +37,8 @@ pub struct BodyMesh {
     pub face_normals: Vec<Vec3>,
     /// Vertex velocities (empty when the body is at rest).
     pub velocities: Vec<Vec3>,
+    /// The vertices hashed for [`BodyMesh::nearest_vertex`], built on first use after each shape.
+    grid: std::sync::OnceLock<VertexGrid>,
 }
 
 impl BodyMesh {
@@ -47,6 +55,7 @@ impl BodyMesh {
             positions: mesh.positions.clone(),
             face_normals: Vec::new(),
             velocities: Vec::new(),
+            grid: std::sync::OnceLock::new(),
         };
         body.compute_normals();
         Ok(body)
@@ -74,6 +83,7 @@ impl BodyMesh {
             self.velocities.extend_from_slice(&frame.velocities);
         }
         self.face_normals.clear();
+        self.grid = std::sync::OnceLock::new();
         Ok(())
     }
 
@@ -139,6 +149,22 @@ impl BodyMesh {
                 return v;
             }
             v = next;
+        }
+    }
+
+    /// The nearest vertex to `p`, from a guess: the hill-climb from `start` (P1's tracking), unless
+    /// the spatial hash of the vertices knows a nearer vertex within [`SNAP_REACH`] (the climb
+    /// stopped at a local minimum: another limb). Exact for points within that reach of a vertex.
+    pub fn nearest_vertex(&self, p: &Vec3, start: u32) -> u32 {
+        let v = self.climb(p, start);
+        let d2 = (self.positions[v as usize] - p).norm_squared();
+        let r = d2.sqrt().min(SNAP_REACH);
+        let grid = self
+            .grid
+            .get_or_init(|| VertexGrid::new(&self.positions, SNAP_REACH));
+        match grid.nearest_within(&self.positions, p, r) {
+            Some((w, d)) if d < d2 => w,
+            _ => v,
         }
     }
 

@@ -2,8 +2,11 @@
 //! (mannequin, MakeHuman, skinning) are in body-model.
 //!
 //! - [`NearestVertexCollider`]: P1's collider. Each point keeps its nearest body vertex, updated by a
-//!   local hill-climb from last step's vertex over the body's vertex graph; a point is inside when it is
-//!   behind every face incident to that vertex, and is then moved onto the nearest of those faces.
+//!   local hill-climb from last step's vertex over the body's vertex graph; a point is inside when
+//!   it is behind every face incident to that vertex, and is then moved onto the nearest of those
+//!   faces. Its probes (the contact planes of the VBD solver) check the climb against a spatial hash
+//!   of the body's vertices ([`grid::VertexGrid`]), so no point near the body is left at a local
+//!   minimum on another limb.
 //! - [`SdfCollider`]: P3's signed distance field on a regular grid (trilinear), rebuilt from the
 //!   deformed body at every update (narrow band plus flood fill).
 //! - [`DepthMapCollider`]: P4's six orthographic depth and normal maps of the body, on the CPU.
@@ -19,6 +22,7 @@ pub mod carry;
 pub mod depth;
 pub mod exact;
 pub mod follow;
+pub mod grid;
 pub mod sdf;
 pub mod tracker;
 

@@ -150,7 +150,8 @@ pub fn bvh_motion(
     skin: Option<BodySkin<'_>>,
 ) -> Result<Retargeted, AssetError> {
     let path = resolve(scene, "motion.file", &m.file)?;
-    let clip = tryon_io::read_bvh(&path, m.unit)?;
+    let mut clip = tryon_io::read_bvh(&path, m.unit)?;
+    clip.frame_time /= m.speed;
     let rig = Rig::new(skeleton.clone(), joint_rest.to_vec(), tips);
     let opt = RetargetOptions {
         fps: scene.scene.fps,

@@ -472,11 +472,20 @@ pub struct BvhSpec {
     #[serde(default = "bvh_arm_clearance")]
     #[schemars(range(min = 0.0, max = 0.2))]
     pub arm_clearance: Real,
+    /// Playback speed: 2 plays the clip twice as fast (`start` and `duration` are then in seconds
+    /// of the faster clip). The hard cases replay clips at 3x to test tunnelling.
+    #[serde(default = "bvh_speed")]
+    #[schemars(range(min = 0.1, max = 10.0))]
+    pub speed: Real,
     /// Fastest a joint may turn (degrees per second): faster turns in the data (a glitch: 131_01's
     /// right wrist spins 7,760 degrees per second for two frames) are cut to this; 0 = no limit.
     #[serde(default = "bvh_max_turn")]
     #[schemars(range(min = 0.0, max = 100000.0))]
     pub max_turn: Real,
+}
+
+fn bvh_speed() -> Real {
+    1.0
 }
 
 fn bvh_max_turn() -> Real {
