@@ -52,6 +52,23 @@ fn any_stiffness_is_stable_at_the_frames_step() {
     }
 }
 
+/// Moves point `k` at `p` out of the sphere of radius `r` at `c` onto its surface, with a contact.
+fn out_of_sphere(k: usize, p: &mut Vec3, c: Vec3, r: Real, contacts: &mut Vec<Contact>) {
+    let d = (*p - c).norm() - r;
+    if d < 0.0 {
+        let n = (*p - c) / (*p - c).norm();
+        contacts.push(Contact {
+            point: k as u32,
+            face: 0,
+            bary: [1.0, 0.0, 0.0],
+            normal: n,
+            depth: -d,
+            body_velocity: Vec3::zeros(),
+        });
+        *p = c + n * r;
+    }
+}
+
 /// A sphere of radius `r` at the origin.
 struct Sphere {
     r: Real,
@@ -64,19 +81,7 @@ impl Collider for Sphere {
     fn update(&mut self, _body: &tryon_core::frames::BodyFrame) {}
     fn resolve(&mut self, points: &mut [Vec3], contacts: &mut Vec<Contact>) {
         for (k, p) in points.iter_mut().enumerate() {
-            let d = p.norm() - self.r;
-            if d < 0.0 {
-                let n = *p / p.norm();
-                contacts.push(Contact {
-                    point: k as u32,
-                    face: 0,
-                    bary: [1.0, 0.0, 0.0],
-                    normal: n,
-                    depth: -d,
-                    body_velocity: Vec3::zeros(),
-                });
-                *p = n * self.r;
-            }
+            out_of_sphere(k, p, Vec3::zeros(), self.r, contacts);
         }
     }
     fn signed_distance(&self, p: &Vec3) -> Option<Real> {
@@ -161,19 +166,7 @@ impl Collider for TwoSpheres {
     fn resolve(&mut self, points: &mut [Vec3], contacts: &mut Vec<Contact>) {
         for (k, p) in points.iter_mut().enumerate() {
             for c in self.centres() {
-                let d = (*p - c).norm() - self.r;
-                if d < 0.0 {
-                    let n = (*p - c) / (*p - c).norm();
-                    contacts.push(Contact {
-                        point: k as u32,
-                        face: 0,
-                        bary: [1.0, 0.0, 0.0],
-                        normal: n,
-                        depth: -d,
-                        body_velocity: Vec3::zeros(),
-                    });
-                    *p = c + n * self.r;
-                }
+                out_of_sphere(k, p, c, self.r, contacts);
             }
         }
     }
