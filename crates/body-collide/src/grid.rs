@@ -21,19 +21,19 @@ const MAX_SPAN: i64 = 8;
 
 /// Floor of `x` as an integer (saturating), without a call to libm's `floor`.
 #[inline]
-fn floor_i(x: Real) -> i64 {
+pub(crate) fn floor_i(x: Real) -> i64 {
     let i = x as i64;
     if (i as Real) > x { i - 1 } else { i }
 }
 
 #[inline]
-fn cell_of(p: &Vec3, inv: Real) -> [i64; 3] {
+pub(crate) fn cell_of(p: &Vec3, inv: Real) -> [i64; 3] {
     [floor_i(p.x * inv), floor_i(p.y * inv), floor_i(p.z * inv)]
 }
 
 /// The bucket of a cell; `mask` is the bucket count (a power of two) less one.
 #[inline]
-fn bucket(c: [i64; 3], mask: usize) -> usize {
+pub(crate) fn bucket(c: [i64; 3], mask: usize) -> usize {
     let h = (c[0].wrapping_mul(73_856_093))
         ^ (c[1].wrapping_mul(19_349_663))
         ^ (c[2].wrapping_mul(83_492_791));

@@ -19,11 +19,13 @@
 pub mod bands;
 pub mod body;
 pub mod carry;
+pub mod ccd;
 pub mod depth;
 pub mod exact;
 pub mod follow;
 pub mod grid;
 pub mod sdf;
+pub mod swept;
 pub mod tracker;
 
 pub use bands::Bands;
@@ -35,5 +37,7 @@ pub use follow::{BodyFollower, FollowParams, SurfaceBinding};
 pub use sdf::SdfCollider;
 pub use tracker::NearestVertexCollider;
 
+#[cfg(test)]
+mod swept_tests;
 #[cfg(test)]
 mod tests;

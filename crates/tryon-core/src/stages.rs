@@ -123,6 +123,23 @@ pub trait Collider: Send {
         let _ = reach;
         self.probe(points, which, out);
     }
+    /// Continuous collision: `end` holds where the points `start` moved to over a step during
+    /// which the body went through the fraction `span` of its last move (0 = its shape before the
+    /// last [`Collider::update`], 1 = the shape that call gave it). Every point whose path crosses
+    /// the body's surface inward is stopped: put where the surface point it hit is at the step's
+    /// end, the collider's thickness out along the normal there, with a contact appended to
+    /// `contacts`. Returns whether the collider tested the paths; the default cannot, and changes
+    /// nothing.
+    fn sweep(
+        &mut self,
+        start: &[Vec3],
+        end: &mut [Vec3],
+        span: [Real; 2],
+        contacts: &mut Vec<Contact>,
+    ) -> bool {
+        let _ = (start, end, span, contacts);
+        false
+    }
 }
 
 /// What a collider says about one point: signed distance to the body (negative inside) and the

@@ -319,6 +319,7 @@ pub fn solver(
                 iterations: c.vbd_iterations,
                 stretch: c.vbd_stretch,
                 contact: c.vbd_contact,
+                swept: c.vbd_swept,
                 ..VbdParams::default()
             };
             Box::new(VbdSim::new(model, p, v, c.thickness))

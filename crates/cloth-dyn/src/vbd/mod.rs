@@ -12,6 +12,11 @@
 
 pub mod colour;
 
+/// Where a particle the swept test stopped on one body part ends behind another part's contact
+/// plane (pinched where the body meets itself, as at an armpit whose skinned arm dips into the
+/// torso), it goes this share of the way back to that plane: the middle of the overlap.
+const PINCH_SHARE: Real = 0.5;
+
 /// Fewest vertices a thread takes at once in a colour's sweep: below this the hand-over costs more
 /// than the Newton steps it shares out.
 const PAR_CHUNK: usize = 32;
@@ -46,6 +51,10 @@ pub struct VbdParams {
     /// contact plane for the step. 1 cm let the demo's thigh pass through the skirt when the body
     /// moved in sub-frames (40.7 mm); 3 cm keeps it at 1.3 mm, and 6 cm is no better.
     pub reach: Real,
+    /// Swept body collision after each step (the collider's `sweep`): a particle whose path
+    /// crosses the body inward is stopped on the surface it hit, and held there by a second
+    /// contact plane in the next step.
+    pub swept: bool,
 }
 
 impl Default for VbdParams {
@@ -58,6 +67,7 @@ impl Default for VbdParams {
             contact: 1e6,
             stick_speed: 0.01,
             reach: 0.03,
+            swept: true,
         }
     }
 }
@@ -104,6 +114,12 @@ pub struct VbdSim {
     dx: Vec<Vec3>,
     /// Positions after the solve, before the fail-safe projection.
     solved: Vec<Vec3>,
+    /// Particles the swept test stopped in this step.
+    stopped: Vec<bool>,
+    /// Per particle, the plane of the body surface the swept test last stopped it on: a second
+    /// contact plane for the next step, so the solve holds it there with its neighbours instead
+    /// of pulling it back through (`None` when it was not stopped).
+    held: Vec<Option<Plane>>,
 }
 
 impl VbdSim {
@@ -163,6 +179,8 @@ impl VbdSim {
             tethers_stale: true,
             dx: Vec::new(),
             solved: vec![Vec3::zeros(); n],
+            stopped: Vec::new(),
+            held: vec![None; n],
         }
     }
 
@@ -233,34 +251,37 @@ impl VbdSim {
             let t = (1.0 - a.rest / l).max(0.0);
             hess += (nn + (Mat3::identity() - nn) * t) * a.k;
         }
-        if let Some(pl) = self.planes[i] {
-            let gap = pl.normal.dot(&(xi - pl.point)) - self.thickness;
-            if gap < 0.0 {
-                let kc = self.vbd.contact;
-                f -= pl.normal * (kc * gap);
-                hess += pl.normal * pl.normal.transpose() * kc;
-                // Lagged friction, bounded by the contact force of this iterate.
-                let mu = self.params.friction;
-                let lambda = -kc * gap;
-                let slip = xi - self.prev[i];
-                let u = slip - pl.normal * slip.dot(&pl.normal);
-                let ul = u.norm();
-                let eps = self.vbd.stick_speed * h;
-                if mu > 0.0 && lambda > 0.0 {
-                    let tangent = Mat3::identity() - pl.normal * pl.normal.transpose();
-                    let scale = if ul > eps {
-                        mu * lambda / ul
-                    } else {
-                        mu * lambda / eps
-                    };
-                    f -= u * scale;
-                    hess += tangent * scale;
-                }
-            }
+        for pl in [self.planes[i], self.held[i]].into_iter().flatten() {
+            self.contact(&pl, i, xi, h, &mut f, &mut hess);
         }
         match hess.cholesky() {
             Some(c) => c.solve(&f),
             None => Vec3::zeros(),
+        }
+    }
+
+    /// Adds to vertex `i`'s force and Hessian (at `xi`) the contact energy of plane `pl`: a
+    /// quadratic penalty holding it a thickness outside, and IPC's lagged friction bounded by the
+    /// penalty's force.
+    fn contact(&self, pl: &Plane, i: usize, xi: Vec3, h: Real, f: &mut Vec3, hess: &mut Mat3) {
+        let gap = pl.normal.dot(&(xi - pl.point)) - self.thickness;
+        if gap >= 0.0 {
+            return;
+        }
+        let kc = self.vbd.contact;
+        *f -= pl.normal * (kc * gap);
+        *hess += pl.normal * pl.normal.transpose() * kc;
+        let mu = self.params.friction;
+        let lambda = -kc * gap;
+        let slip = xi - self.prev[i];
+        let u = slip - pl.normal * slip.dot(&pl.normal);
+        let ul = u.norm();
+        let eps = self.vbd.stick_speed * h;
+        if mu > 0.0 && lambda > 0.0 {
+            let tangent = Mat3::identity() - pl.normal * pl.normal.transpose();
+            let scale = mu * lambda / ul.max(eps);
+            *f -= u * scale;
+            *hess += tangent * scale;
         }
     }
 
@@ -306,40 +327,83 @@ impl VbdSim {
         }
     }
 
-    /// The fail-safe after the solve: a particle that had a contact plane for the step keeps the
-    /// side of it it came from (projected back onto the plane if the solve left it behind, so it
-    /// is never pushed through to another body part); one that started inside is left to the
-    /// contact energy; only the others (far from the body at the start, reached by a fast limb)
-    /// get the collider's projection. Projected onto whichever part was nearest, particles caught
-    /// where two parts meet (armpits) tore the cloth there: makehuman-dress-walk's armholes
-    /// reached 6.4 times their rest length.
-    fn fail_safe(&mut self, x: &mut [Vec3], collider: &mut dyn Collider) {
+    /// The fail-safe after the solve. First the swept test, where the collider has one: a
+    /// particle whose path crosses the moving body inward is stopped on the surface it hit, on
+    /// the side it came from (`stopped`). Then a particle that had a contact plane for the step
+    /// keeps the side of it it came from (projected back onto the plane if the solve left it
+    /// behind, so it is never pushed through to another body part); one that started inside is
+    /// left to the contact energy; only the others (far from the body at the start) get the
+    /// collider's projection. Projected onto whichever part was nearest, particles caught where
+    /// two parts meet (armpits) tore the cloth there: makehuman-dress-walk's armholes reached 6.4
+    /// times their rest length.
+    fn fail_safe(&mut self, x: &mut [Vec3], span: [Real; 2], collider: &mut dyn Collider) {
         self.solved.clone_from_slice(x);
         self.contacts.clear();
+        self.stopped.clear();
+        self.stopped.resize(x.len(), false);
+        self.held.iter_mut().for_each(|h| *h = None);
+        if self.vbd.swept && collider.sweep(&self.prev, &mut self.solved, span, &mut self.contacts)
+        {
+            // Kinematic particles (bands, grabs) go where they are led.
+            let (inv_mass, solved) = (&self.model.inv_mass, &mut self.solved);
+            let (planes, prev) = (&self.planes, &self.prev);
+            self.contacts.retain(|c| {
+                let i = c.point as usize;
+                let outside =
+                    planes[i].is_none_or(|pl| pl.normal.dot(&(prev[i] - pl.point)) >= 0.0);
+                let free = inv_mass[i] != 0.0 && outside;
+                if !free {
+                    solved[i] = x[i];
+                }
+                free
+            });
+            for c in &self.contacts {
+                let i = c.point as usize;
+                self.stopped[i] = true;
+                self.held[i] = Some(Plane {
+                    point: self.solved[i] - c.normal * self.thickness,
+                    normal: c.normal,
+                });
+            }
+        }
+        let swept = self.contacts.len();
         collider.resolve(x, &mut self.contacts);
+        let stopped = &self.stopped;
+        let mut k = 0;
+        self.contacts.retain(|c| {
+            k += 1;
+            k <= swept || !stopped[c.point as usize]
+        });
         for i in 0..x.len() {
-            let Some(pl) = self.planes[i] else { continue };
+            let Some(pl) = self.planes[i] else {
+                if self.stopped[i] {
+                    x[i] = self.solved[i];
+                }
+                continue;
+            };
             x[i] = self.solved[i];
             let start = pl.normal.dot(&(self.prev[i] - pl.point));
             let gap = pl.normal.dot(&(x[i] - pl.point));
             if start >= 0.0 && gap < 0.0 {
-                x[i] -= pl.normal * gap;
+                // Stopped by one part behind another's plane: pinched where the body meets itself.
+                x[i] -= pl.normal * (gap * if self.stopped[i] { PINCH_SHARE } else { 1.0 });
             }
         }
     }
 
-    /// One step of `h` from `t0`; returns the particles that ended non-finite or too fast.
+    /// One step of `h` from `t0`, during which the body covers the fraction `span` of its last
+    /// move; returns the particles that ended non-finite or too fast.
     fn step(
         &mut self,
         frame: &mut CoarseFrame,
-        t0: Real,
-        h: Real,
+        (t0, h): (Real, Real),
+        span: [Real; 2],
         collider: &mut dyn Collider,
     ) -> u32 {
         self.begin(frame, t0 + h, h, collider);
         let mut x = std::mem::take(&mut frame.positions);
         self.solve(&mut x, h);
-        self.fail_safe(&mut x, collider);
+        self.fail_safe(&mut x, span, collider);
         frame.positions = x;
         let max2 = self.params.max_speed * self.params.max_speed;
         let mut bad = 0;
@@ -373,7 +437,9 @@ impl ClothSolver for VbdSim {
         let bad_input = self.model.sanitize(frame);
         let (longest, max_speed) = (self.vbd.substep, self.params.max_speed);
         let mut backup = std::mem::take(&mut self.backup);
-        let step = |f: &mut CoarseFrame, t: Real, h: Real| self.step(f, t, h, collider);
+        // The body is at its new shape for the whole frame (it moved at the collider's update).
+        let step =
+            |f: &mut CoarseFrame, t: Real, h: Real| self.step(f, (t, h), [1.0, 1.0], collider);
         let mut report =
             frame_with_retries(frame, dt, longest, max_speed, bad_input, &mut backup, step);
         self.backup = backup;

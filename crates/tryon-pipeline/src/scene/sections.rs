@@ -82,6 +82,9 @@ pub struct ClothSection {
     /// The `vbd` solver's contact stiffness (N/m).
     #[schemars(range(min = 1.0, max = 1e9))]
     pub vbd_contact: Real,
+    /// The `vbd` solver's swept (continuous) body collision: a particle whose path in a step
+    /// crosses the body's surface inward is stopped on it, however thin the part.
+    pub vbd_swept: bool,
 }
 
 impl Default for ClothSection {
@@ -113,6 +116,7 @@ impl Default for ClothSection {
             vbd_iterations: vbd.iterations,
             vbd_stretch: vbd.stretch,
             vbd_contact: vbd.contact,
+            vbd_swept: vbd.swept,
         }
     }
 }
