@@ -2,6 +2,7 @@
 //! foundation (a jumping body, a cloth that starts inside the body, bad meshes), determinism.
 
 mod end_to_end;
+mod hard_cases;
 mod makehuman_body;
 mod real_assets;
 mod retarget;

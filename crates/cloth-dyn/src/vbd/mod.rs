@@ -17,6 +17,9 @@ pub mod colour;
 /// torso), it goes this share of the way back to that plane: the middle of the overlap.
 const PINCH_SHARE: Real = 0.5;
 
+/// The contact penalty is at least this many times the summed stiffness of a vertex's springs.
+const CONTACT_OVER_SPRINGS: Real = 1.0;
+
 /// Fewest vertices a thread takes at once in a colour's sweep: below this the hand-over costs more
 /// than the Newton steps it shares out.
 const PAR_CHUNK: usize = 32;
@@ -114,6 +117,8 @@ pub struct VbdSim {
     dx: Vec<Vec3>,
     /// Positions after the solve, before the fail-safe projection.
     solved: Vec<Vec3>,
+    /// Per vertex, the summed stiffness of its springs (N/m).
+    spring_sum: Vec<Real>,
     /// Particles the swept test stopped in this step.
     stopped: Vec<bool>,
     /// Per particle, the plane of the body surface the swept test last stopped it on: a second
@@ -158,6 +163,7 @@ impl VbdSim {
             .map(|l| l.iter().map(|a| a.other).collect())
             .collect();
         let (order, colours) = colour::vertices(&neighbours);
+        let spring_sum = lists.iter().map(|l| l.iter().map(|a| a.k).sum()).collect();
         let z = vec![Vec3::zeros(); n];
         VbdSim {
             model,
@@ -180,6 +186,7 @@ impl VbdSim {
             dx: Vec::new(),
             solved: vec![Vec3::zeros(); n],
             stopped: Vec::new(),
+            spring_sum,
             held: vec![None; n],
         }
     }
@@ -268,7 +275,12 @@ impl VbdSim {
         if gap >= 0.0 {
             return;
         }
-        let kc = self.vbd.contact;
+        // The penalty must dominate the springs the vertex hangs from, or stiff cloth is dragged
+        // through the body: never softer than their summed stiffness.
+        let kc = self
+            .vbd
+            .contact
+            .max(self.spring_sum[i] * CONTACT_OVER_SPRINGS);
         *f -= pl.normal * (kc * gap);
         *hess += pl.normal * pl.normal.transpose() * kc;
         let mu = self.params.friction;
