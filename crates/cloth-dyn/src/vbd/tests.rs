@@ -219,10 +219,12 @@ fn cloth_pinched_between_two_parts_is_squeezed_not_pushed_through() {
     assert_eq!(through, 0);
     assert!(stretch < 1.10, "stretch {stretch}");
     assert!(mid < 0.005, "the pinched part is {mid} m off the middle");
-    // The parts overlap by 1 cm where the cloth is: nowhere for it to be, yet none goes through
-    // (measured stretch 1.59: the cloth is squeezed out of the overlap).
+    // The parts overlap by 1 cm where the cloth is: nowhere for it to be, yet none goes through.
+    // The cloth is squeezed out of the overlap: measured stretch 1.59 with a 1e6 N/m penalty,
+    // 1.92 since the penalty follows the springs' stiffness (2e6 N/m on this sheet; a harder
+    // squeeze pushes more cloth out).
     let (stretch, through, mid) = pinch(0.095);
     assert_eq!(through, 0);
-    assert!(stretch < 1.7, "stretch {stretch}");
+    assert!(stretch < 2.0, "stretch {stretch}");
     assert!(mid < 0.01, "the pinched part is {mid} m off the middle");
 }
