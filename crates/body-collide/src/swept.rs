@@ -14,6 +14,7 @@
 use crate::body::BodyMesh;
 use crate::ccd::{Crossing, inward_crossing};
 use crate::grid::{bucket, cell_of};
+use rayon::prelude::*;
 use tryon_core::frames::Contact;
 use tryon_core::math::{Real, Vec3, is_finite};
 
@@ -23,6 +24,9 @@ const CELL: Real = 0.04;
 const MAX_SPAN: i64 = 8;
 /// The hashed region is the points' box grown by this (m), so later steps of the same move fit.
 const GROW: Real = 0.1;
+
+/// Fewest points a thread takes at once.
+const PAR_CHUNK: usize = 64;
 
 /// An axis-aligned box.
 type Aabb = (Vec3, Vec3);
@@ -49,8 +53,6 @@ pub struct SweptBody {
     big: Vec<u32>,
     /// The region hashed, `None` when the hash is stale.
     region: Option<Aabb>,
-    /// Scratch: one point's candidate triangles.
-    found: Vec<u32>,
 }
 
 impl SweptBody {
@@ -129,8 +131,8 @@ impl SweptBody {
     }
 
     /// Collects into `found` the triangles hashed in the cells `path` meets, each once.
-    fn candidates(&mut self, path: &Aabb) {
-        self.found.clear();
+    fn candidates(&self, path: &Aabb, found: &mut Vec<u32>) {
+        found.clear();
         let buckets = self.starts.len().saturating_sub(1);
         if buckets == 0 {
             return;
@@ -138,17 +140,21 @@ impl SweptBody {
         let inv = 1.0 / CELL;
         let (lo, hi) = (cell_of(&path.0, inv), cell_of(&path.1, inv));
         if (0..3).any(|k| hi[k] - lo[k] > MAX_SPAN) {
-            self.found.extend_from_slice(&self.items);
+            found.extend_from_slice(&self.items);
         } else {
-            let (starts, items, found) = (&self.starts, &self.items, &mut self.found);
             for_cells(lo, hi, |c| {
                 let b = bucket(c, buckets - 1);
-                found.extend_from_slice(&items[starts[b] as usize..starts[b + 1] as usize]);
+                found.extend_from_slice(
+                    &self.items[self.starts[b] as usize..self.starts[b + 1] as usize],
+                );
             });
         }
-        self.found.extend_from_slice(&self.big);
-        self.found.sort_unstable();
-        self.found.dedup();
+        found.extend_from_slice(&self.big);
+        if lo != hi || !self.big.is_empty() {
+            // One cell holds each triangle once; several may share some.
+            found.sort_unstable();
+            found.dedup();
+        }
     }
 
     /// Stops every point of `end` whose path from `start` crosses the body inward while the body
@@ -180,43 +186,52 @@ impl SweptBody {
             let grown = (bounds.0.add_scalar(-GROW), bounds.1.add_scalar(GROW));
             self.build(body, grown);
         }
-        for i in 0..end.len() {
-            let path = (start[i], end[i]);
-            if !is_finite(&path.0) || !is_finite(&path.1) {
+        // Each point's crossing is found on its own (in parallel), then applied in order.
+        let this = &*self;
+        let ends: &[Vec3] = end;
+        let hits: Vec<Option<(u32, Crossing)>> = (0..ends.len())
+            .into_par_iter()
+            .with_min_len(PAR_CHUNK)
+            .map_init(Vec::new, |found, i| {
+                let path = (start[i], ends[i]);
+                if !is_finite(&path.0) || !is_finite(&path.1) {
+                    return None;
+                }
+                this.first_crossing(body, &path, span, found)
+            })
+            .collect();
+        for (i, hit) in hits.into_iter().enumerate() {
+            let Some((f, hit)) = hit else { continue };
+            let (q, n) = self.surface_at(body, f, hit.bary, span[1]);
+            let height = (end[i] - q).dot(&n);
+            if height >= skin {
                 continue;
             }
-            if let Some((f, hit)) = self.first_crossing(body, &path, span) {
-                let (q, n) = self.surface_at(body, f, hit.bary, span[1]);
-                let height = (path.1 - q).dot(&n);
-                if height >= skin {
-                    continue;
-                }
-                end[i] = path.1 + n * (skin - height);
-                let depth = (-height).max(0.0);
-                contacts.push(Contact {
-                    point: i as u32,
-                    face: f,
-                    bary: hit.bary,
-                    normal: n,
-                    depth,
-                    body_velocity: body.velocity_at(f as usize, hit.bary),
-                });
-            }
+            end[i] += n * (skin - height);
+            contacts.push(Contact {
+                point: i as u32,
+                face: f,
+                bary: hit.bary,
+                normal: n,
+                depth: (-height).max(0.0),
+                body_velocity: body.velocity_at(f as usize, hit.bary),
+            });
         }
     }
 
     /// The earliest inward crossing of `path` through any candidate triangle, with its triangle
     /// (the lowest index on a tie, so the result does not depend on the hash's order).
     fn first_crossing(
-        &mut self,
+        &self,
         body: &BodyMesh,
         path: &(Vec3, Vec3),
         span: [Real; 2],
+        found: &mut Vec<u32>,
     ) -> Option<(u32, Crossing)> {
         let pbox = (path.0.inf(&path.1), path.0.sup(&path.1));
-        self.candidates(&pbox);
+        self.candidates(&pbox, found);
         let mut best: Option<(u32, Crossing)> = None;
-        for &f in &self.found {
+        for &f in found.iter() {
             let corners = body.triangles[f as usize].map(|v| {
                 (
                     self.vertex_at(body, v, span[0]),
@@ -234,7 +249,7 @@ impl SweptBody {
                 continue;
             }
             if let Some(hit) = inward_crossing(path, &corners)
-                && best.is_none_or(|(_, b)| hit.t < b.t)
+                && best.is_none_or(|(g, b)| hit.t < b.t || (hit.t == b.t && f < g))
             {
                 best = Some((f, hit));
             }

@@ -120,3 +120,44 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn the_sweep_is_the_same_on_any_thread_count() {
+    // Points falling through a moving ball from a ring of directions, on 1, 2 and 3 threads.
+    let mesh = icosphere(0.1, 3, Vec3::zeros());
+    let shift = Vec3::new(0.03, -0.02, 0.05);
+    let frame = BodyFrame {
+        time: 0.1,
+        positions: mesh.positions.iter().map(|p| p + shift).collect(),
+        velocities: Vec::new(),
+    };
+    let start: Vec<Vec3> = (0..500)
+        .map(|k| {
+            let a = k as Real * 0.7;
+            let b = k as Real * 0.013;
+            Vec3::new(a.cos() * b.cos(), a.sin() * b.cos(), b.sin()) * 0.15
+        })
+        .collect();
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("a thread pool");
+        pool.install(|| {
+            let mut c = NearestVertexCollider::new(&mesh, SKIN).expect("icosphere");
+            c.update(&frame);
+            let mut end: Vec<Vec3> = start.iter().map(|p| p * 0.2).collect();
+            let mut contacts = Vec::new();
+            c.sweep(&start, &mut end, [0.0, 1.0], &mut contacts);
+            (end, contacts)
+        })
+    };
+    let one = run(1);
+    assert!(
+        one.1.len() > 100,
+        "most points are stopped: {}",
+        one.1.len()
+    );
+    assert_eq!(one, run(2));
+    assert_eq!(one, run(3));
+}
