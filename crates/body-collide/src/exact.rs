@@ -1,14 +1,22 @@
-//! The exact referee: closest point on the whole body triangle mesh via parry3d-f64, with inside
-//! tests by angle-weighted pseudo-normals. Slow but right; it judges every other collider.
+//! The exact referee: the closest point on the whole body triangle mesh, found through a bounding
+//! volume hierarchy of the triangles (parry3d-f64's `Bvh`), with inside tests by angle-weighted
+//! pseudo-normals at the closest feature (Baerentzen and Aanaes 2005). Slow but right; it judges
+//! every other collider. The hierarchy is built once and refitted to each new shape (its leaves'
+//! boxes updated, its tree kept): rebuilding it every frame was a fifth of the demo's wall time.
+//! Its answers are checked against parry's own oriented `TriMesh` queries (tests).
 
 use crate::body::{BodyError, BodyMesh};
+use parry3d_f64::bounding_volume::Aabb;
 use parry3d_f64::math::Point;
-use parry3d_f64::query::PointQueryWithLocation;
-use parry3d_f64::shape::{TriMesh, TriMeshFlags, TrianglePointLocation};
+use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy};
+use parry3d_f64::query::PointQuery;
 use tryon_core::frames::{BodyFrame, Contact};
-use tryon_core::math::{Real, Vec3};
+use tryon_core::math::{Real, Vec3, closest_point_on_triangle, is_finite};
 use tryon_core::mesh::PolyMesh;
 use tryon_core::stages::{Collider, Probe};
+
+/// A face's neighbour across a border edge.
+const NONE: u32 = u32::MAX;
 
 /// Exact point-mesh collider (the referee).
 #[derive(Clone)]
@@ -16,7 +24,11 @@ pub struct ExactCollider {
     pub body: BodyMesh,
     /// Distance the cloth keeps from the body surface (m).
     pub thickness: Real,
-    shape: Option<TriMesh>,
+    bvh: Bvh,
+    /// Per triangle, the triangle across each edge (edge k joins corners k and k + 1), or [`NONE`].
+    across: Vec<[u32; 3]>,
+    /// Angle-weighted pseudo-normal of each vertex for the current shape (not unit).
+    vertex_normals: Vec<Vec3>,
 }
 
 impl std::fmt::Debug for ExactCollider {
@@ -37,57 +49,117 @@ pub struct Projection {
     pub bary: [Real; 3],
 }
 
+/// The box of a triangle (empty for non-finite corners, so it is never visited).
+fn triangle_box([a, b, c]: [Vec3; 3]) -> Aabb {
+    if !(is_finite(&a) && is_finite(&b) && is_finite(&c)) {
+        return Aabb::new_invalid();
+    }
+    Aabb::new(
+        Point::from(a.inf(&b).inf(&c)),
+        Point::from(a.sup(&b).sup(&c)),
+    )
+}
+
+/// For every triangle, the triangle across each of its edges (the first other one found).
+fn neighbours(triangles: &[[u32; 3]]) -> Vec<[u32; 3]> {
+    let mut edges: std::collections::HashMap<(u32, u32), (u32, usize)> =
+        std::collections::HashMap::with_capacity(triangles.len() * 3);
+    let mut across = vec![[NONE; 3]; triangles.len()];
+    for (f, t) in triangles.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            let key = (a.min(b), a.max(b));
+            match edges.get(&key) {
+                Some(&(g, e)) if across[g as usize][e] == NONE => {
+                    across[g as usize][e] = f as u32;
+                    across[f][k] = g;
+                }
+                Some(_) => {}
+                None => {
+                    edges.insert(key, (f as u32, k));
+                }
+            }
+        }
+    }
+    across
+}
+
 impl ExactCollider {
     /// A referee for a body mesh in its current shape.
     pub fn new(mesh: &PolyMesh, thickness: Real) -> Result<Self, BodyError> {
+        let body = BodyMesh::new(mesh)?;
+        let boxes: Vec<Aabb> = (0..body.triangles.len())
+            .map(|f| triangle_box(body.corners(f)))
+            .collect();
         let mut c = ExactCollider {
-            body: BodyMesh::new(mesh)?,
+            bvh: Bvh::from_leaves(BvhBuildStrategy::Binned, &boxes),
+            across: neighbours(&body.triangles),
+            vertex_normals: Vec::new(),
+            body,
             thickness,
-            shape: None,
         };
-        c.rebuild();
+        c.pseudo_normals();
         Ok(c)
     }
 
-    fn rebuild(&mut self) {
-        let pts: Vec<Point<Real>> = self
-            .body
-            .positions
-            .iter()
-            .map(|p| Point::from(*p))
-            .collect();
-        self.shape =
-            TriMesh::with_flags(pts, self.body.triangles.clone(), TriMeshFlags::ORIENTED).ok();
+    /// The vertices' angle-weighted pseudo-normals for the current shape.
+    fn pseudo_normals(&mut self) {
+        let n = &mut self.vertex_normals;
+        n.clear();
+        n.resize(self.body.positions.len(), Vec3::zeros());
+        for (f, t) in self.body.triangles.iter().enumerate() {
+            let c = self.body.corners(f);
+            let normal = self.body.face_normals[f];
+            for k in 0..3 {
+                let (u, v) = (c[(k + 1) % 3] - c[k], c[(k + 2) % 3] - c[k]);
+                let angle = u.angle(&v);
+                if angle.is_finite() {
+                    n[t[k] as usize] += normal * angle;
+                }
+            }
+        }
     }
 
-    /// Closest point on the body surface and signed distance (`None` for a non-finite point).
+    /// The outward pseudo-normal at the feature of triangle `f` that `bary` lies on: a corner's
+    /// vertex, an edge (the sum of its two faces' normals) or the face.
+    fn pseudo_normal(&self, f: u32, bary: [Real; 3]) -> Vec3 {
+        let zeros: Vec<usize> = (0..3).filter(|&k| bary[k] <= 0.0).collect();
+        let t = self.body.triangles[f as usize];
+        let normal = self.body.face_normals[f as usize];
+        match zeros.as_slice() {
+            [a, b] => self.vertex_normals[t[3 - a - b] as usize],
+            [k] => match self.across[f as usize][(k + 1) % 3] {
+                NONE => normal,
+                g => normal + self.body.face_normals[g as usize],
+            },
+            _ => normal,
+        }
+    }
+
+    /// Closest point on the body surface and signed distance (`None` for a non-finite point or
+    /// a body with no triangle).
     pub fn project(&self, p: &Vec3) -> Option<Projection> {
-        if !tryon_core::math::is_finite(p) {
+        if !is_finite(p) {
             return None;
         }
-        let shape = self.shape.as_ref()?;
-        let (proj, (face, loc)) =
-            shape.project_local_point_and_get_location(&Point::from(*p), false);
-        let point = proj.point.coords;
-        let d = (point - p).norm();
-        let bary = match loc {
-            TrianglePointLocation::OnVertex(i) => {
-                let mut b = [0.0; 3];
-                b[i as usize] = 1.0;
-                b
-            }
-            TrianglePointLocation::OnEdge(i, [u, v]) => {
-                let mut b = [0.0; 3];
-                b[i as usize] = u;
-                b[(i as usize + 1) % 3] = v;
-                b
-            }
-            TrianglePointLocation::OnFace(_, b) => b,
-            TrianglePointLocation::OnSolid => [1.0 / 3.0; 3],
-        };
+        let point = Point::from(*p);
+        let (face, (d2, (q, bary))) = self.bvh.find_best(
+            Real::INFINITY,
+            |node, _| {
+                let d = node.aabb().distance_to_local_point(&point, true);
+                d * d
+            },
+            |f, _| {
+                let [a, b, c] = self.body.corners(f as usize);
+                let (q, w) = closest_point_on_triangle(p, &a, &b, &c);
+                Some(((q - p).norm_squared(), (q, w)))
+            },
+        )?;
+        let d = d2.sqrt();
+        let inside = d > 0.0 && (p - q).dot(&self.pseudo_normal(face, bary)) < 0.0;
         Some(Projection {
-            distance: if proj.is_inside { -d } else { d },
-            point,
+            distance: if inside { -d } else { d },
+            point: q,
             face,
             bary,
         })
@@ -100,9 +172,15 @@ impl Collider for ExactCollider {
     }
 
     fn update(&mut self, frame: &BodyFrame) {
-        if self.body.set_frame(frame).is_ok() {
-            self.rebuild();
+        if self.body.set_frame(frame).is_err() {
+            return;
         }
+        for f in 0..self.body.triangles.len() {
+            let b = triangle_box(self.body.corners(f));
+            self.bvh.insert_or_update_partially(b, f as u32, 0.0);
+        }
+        self.bvh.refit_without_opt();
+        self.pseudo_normals();
     }
 
     fn resolve(&mut self, points: &mut [Vec3], contacts: &mut Vec<Contact>) {

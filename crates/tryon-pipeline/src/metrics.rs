@@ -1,8 +1,12 @@
 //! Accuracy metrics: edge stretch, penetration and detachment (by the exact referee).
 
 use body_collide::ExactCollider;
+use rayon::prelude::*;
 use tryon_core::math::{Real, Vec3};
 use tryon_core::stages::Collider;
+
+/// Fewest points a thread takes at once in the referee's queries.
+const QUERY_CHUNK: usize = 256;
 
 /// A garment vertex this much farther from the body than it started counts as detached (m).
 pub const DETACHED: Real = 0.1;
@@ -10,8 +14,10 @@ pub const DETACHED: Real = 0.1;
 /// Signed distance of every point to the referee's body (0 where it cannot say): the baseline
 /// [`penetration`] judges detachment against.
 pub fn distances(referee: &ExactCollider, points: &[Vec3]) -> Vec<Real> {
+    // Each point's query is its own: in parallel, the same result on any thread count.
     points
-        .iter()
+        .par_iter()
+        .with_min_len(QUERY_CHUNK)
         .map(|p| referee.signed_distance(p).unwrap_or(0.0))
         .collect()
 }
@@ -56,10 +62,7 @@ pub struct Penetration {
 /// Penetration of `points` into the referee's body, and how many moved far from it compared
 /// with `start` (their distances at the start; missing entries count as 0).
 pub fn penetration(referee: &ExactCollider, points: &[Vec3], start: &[Real]) -> Penetration {
-    let signed: Vec<Real> = points
-        .iter()
-        .map(|p| referee.signed_distance(p).unwrap_or(0.0))
-        .collect();
+    let signed = distances(referee, points);
     if signed.is_empty() {
         return Penetration::default();
     }
