@@ -123,15 +123,20 @@ impl ExactCollider {
     /// The outward pseudo-normal at the feature of triangle `f` that `bary` lies on: a corner's
     /// vertex, an edge (the sum of its two faces' normals) or the face.
     fn pseudo_normal(&self, f: u32, bary: [Real; 3]) -> Vec3 {
-        let zeros: Vec<usize> = (0..3).filter(|&k| bary[k] <= 0.0).collect();
         let t = self.body.triangles[f as usize];
         let normal = self.body.face_normals[f as usize];
-        match zeros.as_slice() {
-            [a, b] => self.vertex_normals[t[3 - a - b] as usize],
-            [k] => match self.across[f as usize][(k + 1) % 3] {
-                NONE => normal,
-                g => normal + self.body.face_normals[g as usize],
-            },
+        let on = [bary[0] > 0.0, bary[1] > 0.0, bary[2] > 0.0];
+        match on.iter().filter(|&&b| b).count() {
+            // One corner: its vertex.
+            1 => self.vertex_normals[t[on.iter().position(|&b| b).unwrap_or(0)] as usize],
+            // An edge: the corner off it is the zero one; edge k joins corners k and k + 1.
+            2 => {
+                let off = on.iter().position(|&b| !b).unwrap_or(0);
+                match self.across[f as usize][(off + 1) % 3] {
+                    NONE => normal,
+                    g => normal + self.body.face_normals[g as usize],
+                }
+            }
             _ => normal,
         }
     }

@@ -127,3 +127,31 @@ fn a_point_beside_a_sharp_tip_is_outside() {
         assert!(referee.signed_distance(&inside).expect("finite") < 0.0);
     }
 }
+
+#[test]
+fn a_body_frame_with_a_non_finite_vertex_is_no_panic() {
+    // The refitted hierarchy and the swept test take a shape with a NaN vertex without panicking,
+    // and a point far from the broken corner still gets a finite answer from the referee.
+    let m = icosphere(0.2, 2, Vec3::zeros());
+    let mut positions = m.positions.clone();
+    positions[0] = Vec3::new(Real::NAN, 0.0, 0.0);
+    let frame = BodyFrame {
+        time: 0.1,
+        positions,
+        velocities: Vec::new(),
+    };
+    let mut referee = ExactCollider::new(&m, 0.0).expect("body");
+    referee.update(&frame);
+    let far_from_vertex_0 = -m.positions[0] * 2.0;
+    let d = referee
+        .signed_distance(&far_from_vertex_0)
+        .expect("an answer");
+    assert!(d.is_finite() && d > 0.0, "{d}");
+    let mut tracker = crate::NearestVertexCollider::new(&m, 0.002).expect("body");
+    tracker.update(&frame);
+    let start = [far_from_vertex_0, Vec3::zeros()];
+    let mut end = [Vec3::zeros(), far_from_vertex_0];
+    let mut contacts = Vec::new();
+    tracker.sweep(&start, &mut end, [0.0, 1.0], &mut contacts);
+    assert!(end.iter().all(|p| p.iter().all(|c| c.is_finite())));
+}

@@ -340,8 +340,9 @@ impl VbdSim {
     }
 
     /// The fail-safe after the solve. First the swept test, where the collider has one: a
-    /// particle whose path crosses the moving body inward is stopped on the surface it hit, on
-    /// the side it came from (`stopped`). Then a particle that had a contact plane for the step
+    /// particle whose path crosses the body inward (the body as the collider's last update left
+    /// it: the frame's steps do not move it) is stopped on the surface it hit, on the side it came
+    /// from (`stopped`), unless it started inside or is kinematic. Then a particle that had a contact plane for the step
     /// keeps the side of it it came from (projected back onto the plane if the solve left it
     /// behind, so it is never pushed through to another body part); one that started inside is
     /// left to the contact energy; only the others (far from the body at the start) get the
