@@ -11,6 +11,7 @@
 //! solve as a fail-safe only.
 
 pub mod colour;
+mod pairs;
 
 /// Where a particle the swept test stopped on one body part ends behind another part's contact
 /// plane (pinched where the body meets itself, as at an armpit whose skinned arm dips into the
@@ -100,7 +101,12 @@ pub struct VbdSim {
     /// Springs per vertex (CSR).
     offsets: Vec<u32>,
     arms: Vec<Arm>,
-    /// Vertices in colour order and each colour's range.
+    /// The blocks each Newton step moves: a vertex alone, or a sliver's pair (`pairs`).
+    blocks: Vec<[u32; 2]>,
+    /// Per block, a pair's ring (empty for a vertex alone) and its target offset for this step.
+    rings: Vec<pairs::Ring>,
+    targets: Vec<Vec3>,
+    /// Blocks in colour order and each colour's range.
     order: Vec<u32>,
     colours: Vec<std::ops::Range<usize>>,
     thickness: Real,
@@ -113,8 +119,8 @@ pub struct VbdSim {
     backup: (Vec<Vec3>, Vec<Vec3>),
     tethers: Tethers,
     tethers_stale: bool,
-    /// Each colour's steps before they are applied.
-    dx: Vec<Vec3>,
+    /// Each colour's steps (per block) before they are applied.
+    dx: Vec<[Vec3; 2]>,
     /// Positions after the solve, before the fail-safe projection.
     solved: Vec<Vec3>,
     /// Per vertex, the summed stiffness of its springs (N/m).
@@ -158,11 +164,16 @@ impl VbdSim {
             arms.extend_from_slice(l);
             offsets.push(arms.len() as u32);
         }
-        let neighbours: Vec<Vec<u32>> = lists
+        let blocks = pairs::blocks(&offsets, &arms, &model.inv_mass);
+        let rest = &model.rest_positions;
+        let rings: Vec<pairs::Ring> = blocks
             .iter()
-            .map(|l| l.iter().map(|a| a.other).collect())
+            .map(|&b| match b[1] {
+                pairs::ALONE => pairs::Ring::default(),
+                _ => pairs::Ring::new(&offsets, &arms, b, rest, params.rest_scale),
+            })
             .collect();
-        let (order, colours) = colour::vertices(&neighbours);
+        let (order, colours) = colour::vertices(&pairs::neighbours(&offsets, &arms, &blocks));
         let spring_sum = lists.iter().map(|l| l.iter().map(|a| a.k).sum()).collect();
         let z = vec![Vec3::zeros(); n];
         VbdSim {
@@ -171,6 +182,9 @@ impl VbdSim {
             vbd,
             offsets,
             arms,
+            targets: vec![Vec3::zeros(); blocks.len()],
+            blocks,
+            rings,
             order,
             colours,
             thickness,
@@ -235,36 +249,62 @@ impl VbdSim {
             frame.positions[k] = hd.position(t1);
             self.inertial[k] = frame.positions[k];
         }
+        for (b, ring) in self.rings.iter().enumerate() {
+            if !ring.ids.is_empty() {
+                self.targets[b] = ring.target_or_spring(&self.prev, self.blocks[b]);
+            }
+        }
     }
 
-    /// One Newton step on vertex `i`'s block; returns its displacement.
-    fn descend(&self, x: &[Vec3], i: usize, h: Real) -> Vec3 {
-        let m = self.model.mass[i];
-        let w = m / (h * h);
+    /// Vertex `i`'s force and Hessian at `x`: inertia, its springs except those to `partner`,
+    /// and its contact planes.
+    fn gather(&self, x: &[Vec3], i: usize, partner: u32, h: Real) -> (Vec3, Mat3) {
+        let w = self.model.mass[i] / (h * h);
         let xi = x[i];
         let mut f = (self.inertial[i] - xi) * w;
         let mut hess = Mat3::identity() * w;
-        for a in &self.arms[self.offsets[i] as usize..self.offsets[i + 1] as usize] {
-            let d = xi - x[a.other as usize];
-            let l = d.norm();
-            if l < 1e-12 {
+        for a in pairs::arms_of(&self.offsets, &self.arms, i) {
+            if a.other == partner {
                 continue;
             }
-            let n = d / l;
-            f -= n * (a.k * (l - a.rest));
-            let nn = n * n.transpose();
-            // The spring's Hessian made positive semi-definite: the transverse part only while
-            // the spring is stretched.
-            let t = (1.0 - a.rest / l).max(0.0);
-            hess += (nn + (Mat3::identity() - nn) * t) * a.k;
+            if let Some((fs, k)) = pairs::spring(xi, x[a.other as usize], a) {
+                f += fs;
+                hess += k;
+            }
         }
         for pl in [self.planes[i], self.held[i]].into_iter().flatten() {
             self.contact(&pl, i, xi, h, &mut f, &mut hess);
         }
-        match hess.cholesky() {
-            Some(c) => c.solve(&f),
-            None => Vec3::zeros(),
+        (f, hess)
+    }
+
+    /// One Newton step on block `b` (a vertex, or a sliver's pair on their 6 x 6 block); returns
+    /// the members' displacements (zero for a kinematic member).
+    fn descend(&self, x: &[Vec3], b: usize, h: Real) -> [Vec3; 2] {
+        let [i, j] = self.blocks[b];
+        let free = |v: u32| v != pairs::ALONE && self.model.inv_mass[v as usize] != 0.0;
+        let single = |v: u32| {
+            if !free(v) {
+                return Vec3::zeros();
+            }
+            let (f, hess) = self.gather(x, v as usize, pairs::ALONE, h);
+            hess.cholesky().map_or(Vec3::zeros(), |c| c.solve(&f))
+        };
+        if !(free(i) && free(j)) {
+            // Alone, or a member was grabbed since the pairing: each free one by itself.
+            return [single(i), single(j)];
         }
+        let (iu, ju) = (i as usize, j as usize);
+        let (fi, hi) = self.gather(x, iu, j, h);
+        let (fj, hj) = self.gather(x, ju, i, h);
+        let ring = &self.rings[b];
+        let target = self.targets[b];
+        pairs::pair_step(
+            (x[iu], fi, hi),
+            (x[ju], fj, hj),
+            (target, ring.k * pairs::PAIR_STIFFEN),
+        )
+        .map_or([Vec3::zeros(); 2], |(a, b)| [a, b])
     }
 
     /// Adds to vertex `i`'s force and Hessian (at `xi`) the contact energy of plane `pl`: a
@@ -319,22 +359,19 @@ impl VbdSim {
     /// One Newton step on every vertex of one colour: the steps are found in parallel (no two
     /// vertices of a colour share a spring, so each reads only vertices it does not write) and
     /// applied after, so the result is the same for any number of threads.
-    fn sweep_colour(&self, x: &mut [Vec3], ids: &[u32], h: Real, dx: &mut Vec<Vec3>) {
+    fn sweep_colour(&self, x: &mut [Vec3], ids: &[u32], h: Real, dx: &mut Vec<[Vec3; 2]>) {
         dx.clear();
-        dx.resize(ids.len(), Vec3::zeros());
+        dx.resize(ids.len(), [Vec3::zeros(); 2]);
         let xs: &[Vec3] = x;
         dx.par_iter_mut()
             .with_min_len(PAR_CHUNK)
             .zip(ids.par_iter())
-            .for_each(|(d, &i)| {
-                let i = i as usize;
-                if self.model.inv_mass[i] != 0.0 {
-                    *d = self.descend(xs, i, h);
+            .for_each(|(d, &b)| *d = self.descend(xs, b as usize, h));
+        for (d, &b) in dx.iter().zip(ids) {
+            for (dv, &v) in d.iter().zip(&self.blocks[b as usize]) {
+                if v != pairs::ALONE && is_finite(dv) {
+                    x[v as usize] += dv;
                 }
-            });
-        for (d, &i) in dx.iter().zip(ids) {
-            if is_finite(d) {
-                x[i as usize] += d;
             }
         }
     }
