@@ -262,16 +262,43 @@ impl VbdSim {
         let w = self.model.mass[i] / (h * h);
         let xi = x[i];
         let mut f = (self.inertial[i] - xi) * w;
-        let mut hess = Mat3::identity() * w;
+        // Each spring's Hessian, made positive semi-definite, is k (n n^T + t (I - n n^T)) with
+        // t = max(1 - rest / l, 0): summed as an isotropic part k t and a symmetric outer part
+        // k (1 - t) / l^2 d d^T (six entries), with no per-spring matrix.
+        let mut iso = w;
+        let mut o = [0.0; 6];
         for a in pairs::arms_of(&self.offsets, &self.arms, i) {
             if a.other == partner {
                 continue;
             }
-            if let Some((fs, k)) = pairs::spring(xi, x[a.other as usize], a) {
-                f += fs;
-                hess += k;
+            let d = xi - x[a.other as usize];
+            let l2 = d.norm_squared();
+            if l2 < 1e-24 {
+                continue;
             }
+            let l = l2.sqrt();
+            f -= d * (a.k * (l - a.rest) / l);
+            let t = (1.0 - a.rest / l).max(0.0);
+            iso += a.k * t;
+            let s = a.k * (1.0 - t) / l2;
+            o[0] += s * d.x * d.x;
+            o[1] += s * d.x * d.y;
+            o[2] += s * d.x * d.z;
+            o[3] += s * d.y * d.y;
+            o[4] += s * d.y * d.z;
+            o[5] += s * d.z * d.z;
         }
+        let mut hess = Mat3::new(
+            o[0] + iso,
+            o[1],
+            o[2],
+            o[1],
+            o[3] + iso,
+            o[4],
+            o[2],
+            o[4],
+            o[5] + iso,
+        );
         for pl in [self.planes[i], self.held[i]].into_iter().flatten() {
             self.contact(&pl, i, xi, h, &mut f, &mut hess);
         }

@@ -109,23 +109,6 @@ pub fn arms_of<'a>(offsets: &[u32], arms: &'a [Arm], i: usize) -> &'a [Arm] {
     &arms[offsets[i] as usize..offsets[i + 1] as usize]
 }
 
-/// One spring's force on its end `xi` (from `xj`) and its Hessian there, made positive
-/// semi-definite (the transverse part only while stretched); `None` for a collapsed spring.
-pub fn spring(xi: Vec3, xj: Vec3, a: &Arm) -> Option<(Vec3, Mat3)> {
-    let d = xi - xj;
-    let l = d.norm();
-    if l < 1e-12 {
-        return None;
-    }
-    let n = d / l;
-    let nn = n * n.transpose();
-    let t = (1.0 - a.rest / l).max(0.0);
-    Some((
-        -n * (a.k * (l - a.rest)),
-        (nn + (Mat3::identity() - nn) * t) * a.k,
-    ))
-}
-
 /// The frame a pair is held in: the ring of vertices around it with their rest offsets from the
 /// pair's rest centre, the pair's rest offset `d0` (`x_i - x_j`) and its stiffness.
 #[derive(Clone, Debug, Default, PartialEq)]
