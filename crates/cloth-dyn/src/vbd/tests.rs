@@ -284,3 +284,39 @@ fn a_sheet_of_sliver_triangles_dropped_on_a_sphere_keeps_its_shape() {
         );
     }
 }
+
+proptest::proptest! {
+    #[test]
+    fn the_3x3_solve_matches_nalgebras_cholesky(
+        m in proptest::array::uniform9(-1.0f64..1.0),
+        diag in proptest::array::uniform3(1e-3f64..1e7),
+        f in proptest::array::uniform3(-1e3f64..1e3),
+    ) {
+        // A^T A plus a positive diagonal spanning ten decades: symmetric positive definite,
+        // conditioned as a stiff spring beside a light particle's inertia is.
+        let a = Mat3::from_row_slice(&m);
+        let mut h = a.transpose() * a;
+        for k in 0..3 {
+            h[(k, k)] += diag[k];
+        }
+        let f = Vec3::from_row_slice(&f);
+        let want = h.cholesky().unwrap().solve(&f);
+        let got = solve_spd3(&h, &f);
+        proptest::prop_assert!((got - want).norm() <= 1e-9 * want.norm().max(1e-12), "{got} vs {want}");
+    }
+}
+
+#[test]
+fn the_3x3_solve_refuses_what_is_not_positive_definite() {
+    let f = Vec3::new(1.0, 2.0, 3.0);
+    assert_eq!(solve_spd3(&Mat3::zeros(), &f), Vec3::zeros());
+    assert_eq!(
+        solve_spd3(&Mat3::from_diagonal(&Vec3::new(1.0, -1.0, 1.0)), &f),
+        Vec3::zeros()
+    );
+    assert_eq!(
+        solve_spd3(&(Mat3::identity() * Real::NAN), &f),
+        Vec3::zeros()
+    );
+    assert_eq!(solve_spd3(&(Mat3::identity() * 2.0), &f), f / 2.0);
+}
