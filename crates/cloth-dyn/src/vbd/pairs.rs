@@ -19,9 +19,10 @@ use super::Arm;
 use tryon_core::math::{Mat3, Real, Vec3, is_finite};
 
 /// A spring pairs its ends when the product of its shares of the summed spring stiffness at each
-/// end is at least this: one vertex at a time, that product is the rate at which the error along
-/// the spring shrinks each sweep at best. On a regular grid a spring's share is about 0.15 at each
-/// end (product 0.02), so nothing pairs; a 0.5 mm sliver between 6.7 cm cells has 0.97 at each.
+/// end is at least this: one vertex at a time, each sweep leaves about that share of the error
+/// along the spring. On a regular grid a spring's share is about 0.15 at each
+/// end (product 0.02), so nothing pairs; a 0.5 mm sliver between 6.7 cm cells has about 0.95 at
+/// each (product 0.9).
 pub const PAIR_COUPLING: Real = 0.25;
 
 /// A pair's energy is this many times as stiff as the springs joining it. In a spring network the
