@@ -39,6 +39,8 @@ pub struct BodyMesh {
     pub velocities: Vec<Vec3>,
     /// The vertices hashed for [`BodyMesh::nearest_vertex`], built on first use after each shape.
     grid: std::sync::OnceLock<VertexGrid>,
+    /// Unit vertex normals (sums of the fan's face normals), made on first use after each shape.
+    vertex_normals: std::sync::OnceLock<Vec<Vec3>>,
 }
 
 impl BodyMesh {
@@ -56,6 +58,7 @@ impl BodyMesh {
             face_normals: Vec::new(),
             velocities: Vec::new(),
             grid: std::sync::OnceLock::new(),
+            vertex_normals: std::sync::OnceLock::new(),
         };
         body.compute_normals();
         Ok(body)
@@ -84,6 +87,7 @@ impl BodyMesh {
         }
         self.face_normals.clear();
         self.grid = std::sync::OnceLock::new();
+        self.vertex_normals = std::sync::OnceLock::new();
         Ok(())
     }
 
@@ -159,13 +163,34 @@ impl BodyMesh {
         let v = self.climb(p, start);
         let d2 = (self.positions[v as usize] - p).norm_squared();
         let r = d2.sqrt().min(SNAP_REACH);
-        let grid = self
-            .grid
-            .get_or_init(|| VertexGrid::new(&self.positions, SNAP_REACH));
-        match grid.nearest_within(&self.positions, p, r) {
+        match self.grid().nearest_within(&self.positions, p, r) {
             Some((w, d)) if d < d2 => w,
             _ => v,
         }
+    }
+
+    /// The vertices' hash for the current shape (built on first use).
+    pub fn grid(&self) -> &VertexGrid {
+        self.grid
+            .get_or_init(|| VertexGrid::new(&self.positions, SNAP_REACH))
+    }
+
+    /// Unit normal at vertex `v`: its fan's face normals summed (zero for a vertex in no face).
+    pub fn vertex_normal(&self, v: u32) -> Vec3 {
+        let normals = self.vertex_normals.get_or_init(|| {
+            (0..self.positions.len())
+                .map(|w| {
+                    let n: Vec3 = self
+                        .vertex_faces
+                        .row(w)
+                        .iter()
+                        .map(|&f| self.face_normal(f as usize))
+                        .sum();
+                    n.try_normalize(1e-12).unwrap_or(Vec3::zeros())
+                })
+                .collect()
+        });
+        normals[v as usize]
     }
 
     /// The nearest vertex to `p` by checking every vertex.

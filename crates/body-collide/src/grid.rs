@@ -85,6 +85,17 @@ impl VertexGrid {
     /// `r`, with its squared distance. `r` should not exceed a few cells: every cell the ball
     /// touches is visited.
     pub fn nearest_within(&self, points: &[Vec3], p: &Vec3, r: Real) -> Option<(u32, Real)> {
+        self.nearest_within_where(points, p, r, |_| true)
+    }
+
+    /// As [`VertexGrid::nearest_within`], among the points `keep` accepts.
+    pub fn nearest_within_where(
+        &self,
+        points: &[Vec3],
+        p: &Vec3,
+        r: Real,
+        keep: impl Fn(u32) -> bool,
+    ) -> Option<(u32, Real)> {
         let buckets = self.starts.len().saturating_sub(1);
         if buckets == 0 || !(r > 0.0) || !p.iter().all(|c| c.is_finite()) {
             return None;
@@ -98,7 +109,7 @@ impl VertexGrid {
             // A ball of many cells: every point is fewer to look at.
             for (i, q) in points.iter().enumerate() {
                 let d = (q - p).norm_squared();
-                if d < limit {
+                if d < limit && keep(i as u32) {
                     limit = d;
                     best = Some((i as u32, d));
                 }
@@ -112,7 +123,7 @@ impl VertexGrid {
                     let (s, e) = (self.starts[b] as usize, self.starts[b + 1] as usize);
                     for &i in &self.items[s..e] {
                         let d = (points[i as usize] - p).norm_squared();
-                        if d < limit {
+                        if d < limit && keep(i) {
                             limit = d;
                             best = Some((i, d));
                         }
@@ -130,9 +141,15 @@ mod tests {
     use proptest::prelude::*;
 
     fn brute(points: &[Vec3], p: &Vec3, r: Real) -> Option<Real> {
+        brute_where(points, p, r, |_| true)
+    }
+
+    fn brute_where(points: &[Vec3], p: &Vec3, r: Real, keep: impl Fn(u32) -> bool) -> Option<Real> {
         points
             .iter()
-            .map(|q| (q - p).norm_squared())
+            .enumerate()
+            .filter(|(i, _)| keep(*i as u32))
+            .map(|(_, q)| (q - p).norm_squared())
             .filter(|&d| d < r * r)
             .fold(None, |a: Option<Real>, d| Some(a.map_or(d, |a| a.min(d))))
     }
@@ -153,6 +170,13 @@ mod tests {
                 d
             });
             prop_assert_eq!(got, brute(&points, &p, r));
+            // Among every third point only.
+            let third = |i: u32| i % 3 == 1;
+            let got = g.nearest_within_where(&points, &p, r, third).map(|(i, d)| {
+                assert!(third(i));
+                d
+            });
+            prop_assert_eq!(got, brute_where(&points, &p, r, third));
         }
     }
 

@@ -123,6 +123,25 @@ pub trait Collider: Send {
         let _ = reach;
         self.probe(points, which, out);
     }
+    /// The body surface across a pinch. For each listed point (as in [`Collider::probe`]) with
+    /// `first[k]` its probe (the nearest surface), the nearest surface within `reach` of it that
+    /// faces that one from the other side, as a probe of its own (signed distance, outward
+    /// normal), or [`Probe::FAR`] when there is none: where an arm is pressed against the torso, a
+    /// point whose probe found the torso gets the arm. Held off both, the cloth between is
+    /// squeezed instead of being pushed out of one part into the other. The default knows no
+    /// second surface.
+    fn probe_opposite(
+        &mut self,
+        points: &[Vec3],
+        which: &[u32],
+        first: &[Probe],
+        reach: Real,
+        out: &mut Vec<Probe>,
+    ) {
+        let _ = (points, first, reach);
+        out.clear();
+        out.resize(which.len(), Probe::FAR);
+    }
     /// Continuous collision: `end` holds where the points `start` moved to over a step during
     /// which the body went through the fraction `span` of its last move (0 = its shape before the
     /// last [`Collider::update`], 1 = the shape that call gave it). Every point whose path crosses

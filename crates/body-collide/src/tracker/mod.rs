@@ -70,6 +70,7 @@ use tryon_core::mesh::PolyMesh;
 use tryon_core::stages::{Collider, Probe};
 
 mod fan;
+mod opposite;
 
 /// P1's nearest-vertex tracking collider.
 #[derive(Clone, Debug)]
@@ -114,6 +115,8 @@ pub struct NearestVertexCollider {
     probe_checked: Vec<(u32, Vec3)>,
     /// The body's last move, for swept collision.
     swept: SweptBody,
+    /// Per point, the vertex facing its nearest part across a pinch (`probe_opposite`).
+    facing: Vec<opposite::Facing>,
 }
 
 impl NearestVertexCollider {
@@ -142,6 +145,7 @@ impl NearestVertexCollider {
             moves: 0,
             probe_checked: Vec::new(),
             swept: SweptBody::default(),
+            facing: Vec::new(),
             body,
         })
     }
@@ -406,6 +410,17 @@ impl Collider for NearestVertexCollider {
                 },
             });
         }
+    }
+
+    fn probe_opposite(
+        &mut self,
+        points: &[Vec3],
+        which: &[u32],
+        first: &[Probe],
+        reach: Real,
+        out: &mut Vec<Probe>,
+    ) {
+        self.opposites(points, which, first, reach, out);
     }
 
     fn sweep(
