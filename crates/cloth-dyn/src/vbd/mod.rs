@@ -5,21 +5,15 @@
 //! held. Springs are the model's structural and shear springs (stiff) and its flexion springs
 //! (soft, from the modelled shape, so a garment keeps its form). Body contact is an energy inside
 //! the solve: each vertex near the body at the start of the step gets the body's tangent plane
-//! there, and a quadratic penalty holds it a thickness outside; friction is IPC's lagged smoothed
+//! there (and, where another part faces that one across a pinch, that part's plane too:
+//! `contact.rs`), and a quadratic penalty holds it a thickness outside; friction is IPC's lagged smoothed
 //! Coulomb term on the tangential motion relative to the body (static below a slip of `eps_v h`,
 //! kinetic above), bounded by the penalty's normal force. The collider's projection runs after the
 //! solve as a fail-safe only.
 
 pub mod colour;
+mod contact;
 mod pairs;
-
-/// Where a particle the swept test stopped on one body part ends behind another part's contact
-/// plane (pinched where the body meets itself, as at an armpit whose skinned arm dips into the
-/// torso), it goes this share of the way back to that plane: the middle of the overlap.
-const PINCH_SHARE: Real = 0.5;
-
-/// The contact penalty is at least this many times the summed stiffness of a vertex's springs.
-const CONTACT_OVER_SPRINGS: Real = 1.0;
 
 /// Fewest vertices a thread takes at once in a colour's sweep: below this the hand-over costs more
 /// than the Newton steps it shares out.
@@ -113,7 +107,13 @@ pub struct VbdSim {
     prev: Vec<Vec3>,
     inertial: Vec<Vec3>,
     planes: Vec<Option<Plane>>,
+    /// Per particle with a contact plane, the plane of the body part facing that one across a
+    /// pinch ([`Collider::probe_opposite`]): held off both, it is squeezed between them.
+    opposite: Vec<Option<Plane>>,
     probes: Vec<Probe>,
+    /// The particles with a contact plane this step, and their probes.
+    near: Vec<u32>,
+    near_probes: Vec<Probe>,
     all: Vec<u32>,
     contacts: Vec<Contact>,
     backup: (Vec<Vec3>, Vec<Vec3>),
@@ -191,7 +191,10 @@ impl VbdSim {
             prev: z.clone(),
             inertial: z.clone(),
             planes: vec![None; n],
+            opposite: vec![None; n],
             probes: Vec::new(),
+            near: Vec::new(),
+            near_probes: Vec::new(),
             all: (0..n as u32).collect(),
             contacts: Vec::new(),
             backup: (z.clone(), z),
@@ -254,6 +257,9 @@ impl VbdSim {
                 self.targets[b] = ring.target_or_spring(&self.prev, self.blocks[b]);
             }
         }
+        let prev = std::mem::take(&mut self.prev);
+        self.pinches(&prev, collider);
+        self.prev = prev;
     }
 
     /// Vertex `i`'s force and Hessian at `x`: inertia, its springs except those to `partner`,
@@ -299,7 +305,10 @@ impl VbdSim {
             o[4],
             o[5] + iso,
         );
-        for pl in [self.planes[i], self.held[i]].into_iter().flatten() {
+        for pl in [self.planes[i], self.opposite[i], self.held[i]]
+            .into_iter()
+            .flatten()
+        {
             self.contact(&pl, i, xi, h, &mut f, &mut hess);
         }
         (f, hess)
@@ -332,36 +341,6 @@ impl VbdSim {
             (target, ring.k * pairs::PAIR_STIFFEN),
         )
         .map_or([Vec3::zeros(); 2], |(a, b)| [a, b])
-    }
-
-    /// Adds to vertex `i`'s force and Hessian (at `xi`) the contact energy of plane `pl`: a
-    /// quadratic penalty holding it a thickness outside, and IPC's lagged friction bounded by the
-    /// penalty's force.
-    fn contact(&self, pl: &Plane, i: usize, xi: Vec3, h: Real, f: &mut Vec3, hess: &mut Mat3) {
-        let gap = pl.normal.dot(&(xi - pl.point)) - self.thickness;
-        if gap >= 0.0 {
-            return;
-        }
-        // The penalty must dominate the springs the vertex hangs from, or stiff cloth is dragged
-        // through the body: never softer than their summed stiffness.
-        let kc = self
-            .vbd
-            .contact
-            .max(self.spring_sum[i] * CONTACT_OVER_SPRINGS);
-        *f -= pl.normal * (kc * gap);
-        *hess += pl.normal * pl.normal.transpose() * kc;
-        let mu = self.params.friction;
-        let lambda = -kc * gap;
-        let slip = xi - self.prev[i];
-        let u = slip - pl.normal * slip.dot(&pl.normal);
-        let ul = u.norm();
-        let eps = self.vbd.stick_speed * h;
-        if mu > 0.0 && lambda > 0.0 {
-            let tangent = Mat3::identity() - pl.normal * pl.normal.transpose();
-            let scale = mu * lambda / ul.max(eps);
-            *f -= u * scale;
-            *hess += tangent * scale;
-        }
     }
 
     /// The descent sweeps of one step.
@@ -399,71 +378,6 @@ impl VbdSim {
                 if v != pairs::ALONE && is_finite(dv) {
                     x[v as usize] += dv;
                 }
-            }
-        }
-    }
-
-    /// The fail-safe after the solve. First the swept test, where the collider has one: a
-    /// particle whose path crosses the body inward (the body as the collider's last update left
-    /// it: the frame's steps do not move it) is stopped on the surface it hit, on the side it came
-    /// from (`stopped`), unless it started inside or is kinematic. Then a particle that had a contact plane for the step
-    /// keeps the side of it it came from (projected back onto the plane if the solve left it
-    /// behind, so it is never pushed through to another body part); one that started inside is
-    /// left to the contact energy; only the others (far from the body at the start) get the
-    /// collider's projection. Projected onto whichever part was nearest, particles caught where
-    /// two parts meet (armpits) tore the cloth there: makehuman-dress-walk's armholes reached 6.4
-    /// times their rest length.
-    fn fail_safe(&mut self, x: &mut [Vec3], span: [Real; 2], collider: &mut dyn Collider) {
-        self.solved.clone_from_slice(x);
-        self.contacts.clear();
-        self.stopped.clear();
-        self.stopped.resize(x.len(), false);
-        self.held.iter_mut().for_each(|h| *h = None);
-        if self.vbd.swept && collider.sweep(&self.prev, &mut self.solved, span, &mut self.contacts)
-        {
-            // Kinematic particles (bands, grabs) go where they are led.
-            let (inv_mass, solved) = (&self.model.inv_mass, &mut self.solved);
-            let (planes, prev) = (&self.planes, &self.prev);
-            self.contacts.retain(|c| {
-                let i = c.point as usize;
-                let outside =
-                    planes[i].is_none_or(|pl| pl.normal.dot(&(prev[i] - pl.point)) >= 0.0);
-                let free = inv_mass[i] != 0.0 && outside;
-                if !free {
-                    solved[i] = x[i];
-                }
-                free
-            });
-            for c in &self.contacts {
-                let i = c.point as usize;
-                self.stopped[i] = true;
-                self.held[i] = Some(Plane {
-                    point: self.solved[i] - c.normal * self.thickness,
-                    normal: c.normal,
-                });
-            }
-        }
-        let swept = self.contacts.len();
-        collider.resolve(x, &mut self.contacts);
-        let stopped = &self.stopped;
-        let mut k = 0;
-        self.contacts.retain(|c| {
-            k += 1;
-            k <= swept || !stopped[c.point as usize]
-        });
-        for i in 0..x.len() {
-            let Some(pl) = self.planes[i] else {
-                if self.stopped[i] {
-                    x[i] = self.solved[i];
-                }
-                continue;
-            };
-            x[i] = self.solved[i];
-            let start = pl.normal.dot(&(self.prev[i] - pl.point));
-            let gap = pl.normal.dot(&(x[i] - pl.point));
-            if start >= 0.0 && gap < 0.0 {
-                // Stopped by one part behind another's plane: pinched where the body meets itself.
-                x[i] -= pl.normal * (gap * if self.stopped[i] { PINCH_SHARE } else { 1.0 });
             }
         }
     }

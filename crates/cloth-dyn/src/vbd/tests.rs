@@ -150,6 +150,8 @@ fn vbd_is_the_same_on_any_thread_count() {
 struct TwoSpheres {
     r: Real,
     c: Real,
+    /// Whether the collider says which sphere faces a point's nearest one (`probe_opposite`).
+    opposite: bool,
 }
 
 impl TwoSpheres {
@@ -174,6 +176,33 @@ impl Collider for TwoSpheres {
         let [a, b] = self.centres();
         Some(((p - a).norm() - self.r).min((p - b).norm() - self.r))
     }
+    fn probe_opposite(
+        &mut self,
+        points: &[Vec3],
+        which: &[u32],
+        first: &[Probe],
+        _reach: Real,
+        out: &mut Vec<Probe>,
+    ) {
+        out.clear();
+        for (&k, q) in which.iter().zip(first) {
+            let p = points[k as usize];
+            // The sphere whose outward normal at p is not the probe's: the other one.
+            let other = self
+                .centres()
+                .into_iter()
+                .map(|c| (p - c).normalize())
+                .zip(self.centres())
+                .find(|(n, _)| n.dot(&q.normal) < 0.0);
+            out.push(match other {
+                Some((n, c)) if self.opposite => Probe {
+                    distance: (p - c).norm() - self.r,
+                    normal: n,
+                },
+                _ => Probe::FAR,
+            });
+        }
+    }
 }
 
 /// A hanging sheet in the plane x = 0, pinned along its top, between two spheres of radius 0.1 that
@@ -181,9 +210,17 @@ impl Collider for TwoSpheres {
 /// stretch, the most particles beyond a sphere's middle in any frame, and how far off the middle
 /// the pinched part ends.
 fn pinch(closest: Real) -> (Real, usize, Real) {
+    let (stretch, through, mid, _) = pinch_with(closest, true, 0.0);
+    (stretch, through, mid)
+}
+
+/// [`pinch`], with the collider saying (`opposite`) or not which sphere faces a particle's
+/// nearest one, and the sheet hanging at `x0`; also returns the deepest any particle went into
+/// either sphere (m).
+fn pinch_with(closest: Real, opposite: bool, x0: Real) -> (Real, usize, Real, Real) {
     let mut mesh = grid_xz(16, 16, 0.3, 0.3, 0.0);
     for p in &mut mesh.positions {
-        *p = Vec3::new(0.0, -p.z, p.x);
+        *p = Vec3::new(x0, -p.z, p.x);
     }
     let pins: Vec<Handle> = (0..17u32)
         .map(|k| Handle {
@@ -193,14 +230,21 @@ fn pinch(closest: Real) -> (Real, usize, Real) {
         .collect();
     let mut s = sim(&mesh, ClothParams::default(), VbdParams::default(), pins);
     let mut f = s.initial_frame();
-    let mut body = TwoSpheres { r: 0.1, c: 0.16 };
-    let (mut worst, mut through): (Real, usize) = (0.0, 0);
+    let mut body = TwoSpheres {
+        r: 0.1,
+        c: 0.16,
+        opposite,
+    };
+    let (mut worst, mut through, mut deepest): (Real, usize, Real) = (0.0, 0, 0.0);
     for k in 0..60 {
         body.c = (0.16 - 0.002 * k as Real).max(closest);
         s.step_frame(&mut f, 1.0 / 60.0, &mut body);
         assert!(f.positions.iter().all(is_finite), "frame {k}");
         worst = worst.max(max_stretch(&s, &f.positions));
         through = through.max(f.positions.iter().filter(|p| p.x.abs() > closest).count());
+        for p in &f.positions {
+            deepest = deepest.max(-body.signed_distance(p).unwrap_or(0.0));
+        }
     }
     let mid = f
         .positions
@@ -208,7 +252,7 @@ fn pinch(closest: Real) -> (Real, usize, Real) {
         .filter(|p| p.y.abs() < 0.02 && p.z.abs() < 0.02)
         .map(|p| p.x.abs())
         .fold(0.0, Real::max);
-    (worst, through, mid)
+    (worst, through, mid, deepest)
 }
 
 #[test]
@@ -319,4 +363,20 @@ fn the_3x3_solve_refuses_what_is_not_positive_definite() {
         Vec3::zeros()
     );
     assert_eq!(solve_spd3(&(Mat3::identity() * 2.0), &f), f / 2.0);
+}
+
+#[test]
+fn a_particle_held_off_one_part_is_not_pushed_into_the_part_facing_it() {
+    // The sheet hangs 3 mm nearer one sphere, so each particle's nearest part is that one. Held a
+    // thickness (2 mm) off it alone, particles were pushed into the other: with 1 mm between the
+    // surfaces and the sheet, 11 went past the other sphere's middle; where the spheres overlap
+    // by 2 mm, 4.0 mm deep. Held off both, the sheet is squeezed between them.
+    let (_, through, _, deepest) = pinch_with(0.101, true, 0.003);
+    assert_eq!(through, 0);
+    assert!(deepest < 0.0005, "{deepest} m into a sphere");
+    // Overlapping: half the overlap (1 mm) at best; measured 1.7 mm.
+    let (stretch, _, mid, deepest) = pinch_with(0.099, true, 0.003);
+    assert!(deepest < 0.002, "{deepest} m into a sphere");
+    assert!(mid < 0.002, "the pinched part is {mid} m off the middle");
+    assert!(stretch < 1.5, "stretch {stretch}");
 }
