@@ -208,4 +208,25 @@ mod tests {
             assert_eq!(second, Probe::FAR, "r {r}");
         }
     }
+
+    #[test]
+    fn non_finite_points_and_probes_face_nothing_and_do_not_panic() {
+        let body = two_spheres(0.1, 0.105);
+        let nan = Vec3::new(Real::NAN, 0.0, 0.0);
+        let mut c = NearestVertexCollider::new(&body, 0.002).unwrap();
+        let first = [
+            Probe {
+                distance: 0.001,
+                normal: Vec3::x(),
+            },
+            Probe {
+                distance: Real::NAN,
+                normal: Vec3::x(),
+            },
+        ];
+        let points = [nan, Vec3::new(0.0, 0.001, 0.0)];
+        let mut out = Vec::new();
+        c.probe_opposite(&points, &[0, 1], &first, 0.03, &mut out);
+        assert_eq!(out, vec![Probe::FAR, Probe::FAR]);
+    }
 }
