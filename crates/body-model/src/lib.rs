@@ -9,11 +9,13 @@
 pub mod girth;
 pub mod makehuman;
 pub mod mannequin;
+pub mod press;
 pub mod skin;
 
 pub use girth::girth_at;
 pub use makehuman::{Girths, MakeHumanBody, MakeHumanError};
 pub use mannequin::{JOINT_NAMES, Mannequin};
+pub use press::{Press, Pressed};
 pub use skin::{SkinWeights, SkinnedBody, joint_transforms};
 
 #[cfg(test)]

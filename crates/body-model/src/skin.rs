@@ -1,6 +1,7 @@
 //! Linear blend skinning: up to four joint influences per vertex, and a skinned body that turns a
 //! pose into a deformed body frame (positions, and velocities by finite difference).
 
+use crate::press::{Press, Pressed};
 use tryon_core::frames::BodyFrame;
 use tryon_core::math::{Mat3, Real, Vec3};
 use tryon_core::pose::{Pose, Skeleton};
@@ -96,6 +97,10 @@ pub struct SkinnedBody {
     pub skeleton: Skeleton,
     pub joint_rest: Vec<Vec3>,
     pub skin: SkinWeights,
+    /// Parts pressed apart after skinning (none: plain linear blend skinning).
+    pub press: Option<Press>,
+    /// What pressing did, summed over the poses so far.
+    pub pressed: Pressed,
     last: Option<(Real, Vec<Vec3>)>,
 }
 
@@ -114,6 +119,8 @@ impl SkinnedBody {
             skeleton,
             joint_rest,
             skin,
+            press: None,
+            pressed: Pressed::default(),
             last: None,
         }
     }
@@ -144,6 +151,11 @@ impl BodyModel for SkinnedBody {
     fn pose(&mut self, pose: &Pose, out: &mut BodyFrame) {
         out.time = pose.time;
         self.skin_into(pose, &mut out.positions);
+        if let Some(press) = &self.press {
+            let r = press.apply(&mut out.positions, &self.triangles);
+            self.pressed.moved += r.moved;
+            self.pressed.deepest = self.pressed.deepest.max(r.deepest);
+        }
         out.velocities.clear();
         if let Some((t0, x0)) = &self.last {
             let dt = pose.time - t0;
@@ -162,6 +174,9 @@ impl BodyModel for SkinnedBody {
     }
     fn shape_at(&self, pose: &Pose, out: &mut Vec<Vec3>) {
         self.skin_into(pose, out);
+        if let Some(press) = &self.press {
+            press.apply(out, &self.triangles);
+        }
     }
     fn rig(&self) -> Option<Rig<'_>> {
         Some(Rig {
