@@ -13,7 +13,7 @@ fn scratch_dir(name: &str) -> PathBuf {
     d
 }
 
-fn repo() -> PathBuf {
+pub fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .parent()
         .map(Path::to_path_buf)

@@ -100,7 +100,7 @@ pub(crate) fn body(scene: &Scene) -> Result<BuiltBody, AssembleError> {
                 let r = real::bvh_motion(scene, bvh, &b.skeleton, &b.joint_rest, tips, Some(skin))?;
                 BuiltBody {
                     clip_len: r.duration(),
-                    model: Box::new(b.skinned()),
+                    model: Box::new(press(b.skinned(), scene)),
                     motion: Some(Box::new(r)),
                     mesh,
                     makehuman: None,
@@ -159,11 +159,20 @@ fn mannequin(scene: &Scene, spec: &MannequinBody) -> Result<BuiltBody, AssembleE
     );
     Ok(BuiltBody {
         mesh: man.mesh,
-        model: Box::new(model),
+        model: Box::new(press(model, scene)),
         motion: Some(motion),
         makehuman: None,
         clip_len,
     })
+}
+
+/// `body` pressed apart where its parts meet, if the scene asks for it: the gap holds two layers
+/// of the cloth's thickness.
+fn press(body: SkinnedBody, scene: &Scene) -> SkinnedBody {
+    match scene.effects.body_press {
+        true => real::pressed(body, 2.0 * scene.cloth.thickness),
+        false => body,
+    }
 }
 
 /// The scene's garment, before it is placed on the body.

@@ -3,8 +3,9 @@
 //! fitted onto it, and BVH clips retargeted onto the body's skeleton.
 
 use crate::scene::{BvhSpec, MakeHumanSpec, RigName, Scene};
-use body_model::{MakeHumanBody, MakeHumanError};
+use body_model::{MakeHumanBody, MakeHumanError, Press, SkinnedBody};
 use mocap_retarget::clearance::{Envelope, SMOOTHING_S, keep_arms_clear};
+use mocap_retarget::names::{Role, RoleMap};
 use mocap_retarget::turns::limit_turns;
 use mocap_retarget::{Placement, RetargetError, RetargetOptions, Retargeted, Rig, retarget};
 use std::path::{Path, PathBuf};
@@ -195,4 +196,48 @@ pub struct BodySkin<'a> {
     pub points: &'a [Vec3],
     pub joints: &'a [[u16; 4]],
     pub weights: &'a [[Real; 4]],
+}
+
+/// `body` with its parts pressed apart where they meet (`[effects] body_press`), keeping `gap`
+/// between them. Parts are the limbs and the head, each from its first joint down (the rest is
+/// the torso); a vertex belongs to the part of its strongest joint. A skeleton whose roles are not
+/// recognised is left as it is.
+pub fn pressed(mut body: SkinnedBody, gap: Real) -> SkinnedBody {
+    let Some(map) = RoleMap::detect(&body.skeleton) else {
+        return body;
+    };
+    let roots = [
+        Role::LUpperArm,
+        Role::RUpperArm,
+        Role::LThigh,
+        Role::RThigh,
+        Role::Neck,
+    ]
+    .map(|r| map.get(r));
+    let s = &body.skeleton;
+    let part_of_joint: Vec<u8> = (0..s.parents.len())
+        .map(|mut j| {
+            loop {
+                if let Some(k) = roots.iter().position(|r| *r == Some(j)) {
+                    break k as u8 + 1;
+                }
+                match s.parents[j] {
+                    Some(p) => j = p,
+                    None => break 0,
+                }
+            }
+        })
+        .collect();
+    let parts = body
+        .skin
+        .joints
+        .iter()
+        .zip(&body.skin.weights)
+        .map(|(j, w)| {
+            let k = (0..4).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap_or(0);
+            part_of_joint.get(j[k] as usize).copied().unwrap_or(0)
+        })
+        .collect();
+    body.press = Some(Press { parts, gap });
+    body
 }

@@ -195,6 +195,10 @@ pub struct EffectsSection {
     pub depth_resolution: usize,
     /// P1.3.4: carry the cloth with the moving body.
     pub follow_body: bool,
+    /// Press a skinned body's parts apart where they meet in a pose (an arm against the chest,
+    /// thighs together), leaving two cloth thicknesses between them, as flesh gives way; off,
+    /// the parts pass into each other as linear blend skinning puts them.
+    pub body_press: bool,
     /// Velocity damping (1/s); 0 turns it off.
     #[schemars(range(min = 0.0, max = 100.0))]
     pub velocity_damping: Real,
@@ -241,6 +245,7 @@ impl Default for EffectsSection {
             sdf_resolution: body_collide::SdfCollider::DEFAULT_RESOLUTION,
             depth_resolution: body_collide::DepthMapCollider::DEFAULT_RESOLUTION,
             follow_body: true,
+            body_press: true,
             velocity_damping: env.velocity_damping,
             refine: 0,
             // The surface stages a refined scene gets unless it says otherwise: fine collision
