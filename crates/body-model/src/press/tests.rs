@@ -18,20 +18,18 @@ fn balls(apart: Real) -> (Vec<Vec3>, Vec<[u32; 3]>, Vec<u8>) {
     (x, t, parts)
 }
 
+/// The x coordinates of part `part`'s vertices.
+fn xs<'a>(x: &'a [Vec3], parts: &'a [u8], part: u8) -> impl Iterator<Item = Real> + 'a {
+    x.iter()
+        .zip(parts)
+        .filter(move |(_, p)| **p == part)
+        .map(|(v, _)| v.x)
+}
+
 /// The x extent where the balls meet: ball 0's rightmost point and ball 1's leftmost.
 fn facing_sides(x: &[Vec3], parts: &[u8]) -> (Real, Real) {
-    let right = x
-        .iter()
-        .zip(parts)
-        .filter(|(_, p)| **p == 0)
-        .map(|(v, _)| v.x)
-        .fold(Real::MIN, Real::max);
-    let left = x
-        .iter()
-        .zip(parts)
-        .filter(|(_, p)| **p == 1)
-        .map(|(v, _)| v.x)
-        .fold(Real::MAX, Real::min);
+    let right = xs(x, parts, 0).fold(Real::MIN, Real::max);
+    let left = xs(x, parts, 1).fold(Real::MAX, Real::min);
     (right, left)
 }
 
@@ -56,12 +54,7 @@ fn overlapping_parts_are_pressed_apart_to_the_gap() {
     );
     assert!((right - 0.093).abs() < 0.0015, "right pole at {right}");
     // Only the facing caps moved: the far poles stay where they were.
-    let far = x
-        .iter()
-        .zip(&parts)
-        .filter(|(_, p)| **p == 1)
-        .map(|(v, _)| v.x)
-        .fold(Real::MIN, Real::max);
+    let far = xs(&x, &parts, 1).fold(Real::MIN, Real::max);
     assert!((far - 0.29).abs() < 1e-12);
 }
 
