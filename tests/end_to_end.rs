@@ -430,3 +430,32 @@ fn the_referee_judges_every_nth_frame_or_none_and_says_how_many() {
     let (n, frames, mean) = judged(0);
     assert_eq!((n, frames.len(), mean), (0, 0, 0.0));
 }
+
+/// stats.json says what the body press did: on the demo (the mannequin's arms swing against its
+/// sides) some vertices are pressed every pose, no deeper than the press reaches; with the press
+/// off the figures are absent, not zero.
+#[test]
+fn the_run_reports_what_the_body_press_moved_and_nothing_when_it_is_off() {
+    let metrics = |press: bool| {
+        let mut s = Scene::demo();
+        s.effects.body_press = press;
+        Pipeline::new(s)
+            .unwrap()
+            .run(Some(6), |_, _| {})
+            .stats
+            .metrics
+    };
+    let on = metrics(true);
+    let per_pose = on.body_pressed_per_pose.expect("pressed per pose");
+    let deepest = on.body_press_deepest_m.expect("deepest overlap");
+    assert!(per_pose > 0.0, "{per_pose}");
+    assert!(
+        deepest > 0.0 && deepest <= body_model::press::DEEPEST,
+        "{deepest}"
+    );
+    let off = metrics(false);
+    assert_eq!(
+        (off.body_pressed_per_pose, off.body_press_deepest_m),
+        (None, None)
+    );
+}

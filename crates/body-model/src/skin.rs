@@ -5,7 +5,7 @@ use crate::press::{Press, Pressed};
 use tryon_core::frames::BodyFrame;
 use tryon_core::math::{Mat3, Real, Vec3};
 use tryon_core::pose::{Pose, Skeleton};
-use tryon_core::stages::{BodyModel, Rig};
+use tryon_core::stages::{BodyCorrections, BodyModel, Rig};
 
 /// Skinning weights: per vertex four (joint, weight) pairs; unused slots have weight 0; weights sum to 1.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -101,6 +101,8 @@ pub struct SkinnedBody {
     pub press: Option<Press>,
     /// What pressing did, summed over the poses so far.
     pub pressed: Pressed,
+    /// Poses the press ran on.
+    pub pressed_poses: usize,
     last: Option<(Real, Vec<Vec3>)>,
 }
 
@@ -121,6 +123,7 @@ impl SkinnedBody {
             skin,
             press: None,
             pressed: Pressed::default(),
+            pressed_poses: 0,
             last: None,
         }
     }
@@ -155,6 +158,7 @@ impl BodyModel for SkinnedBody {
             let r = press.apply(&mut out.positions, &self.triangles);
             self.pressed.moved += r.moved;
             self.pressed.deepest = self.pressed.deepest.max(r.deepest);
+            self.pressed_poses += 1;
         }
         out.velocities.clear();
         if let Some((t0, x0)) = &self.last {
@@ -185,6 +189,13 @@ impl BodyModel for SkinnedBody {
             joint_rest: &self.joint_rest,
             joints: &self.skin.joints,
             weights: &self.skin.weights,
+        })
+    }
+    fn corrections(&self) -> Option<BodyCorrections> {
+        self.press.as_ref().map(|_| BodyCorrections {
+            poses: self.pressed_poses,
+            moved: self.pressed.moved,
+            deepest: self.pressed.deepest,
         })
     }
 }

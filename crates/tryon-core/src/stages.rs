@@ -32,6 +32,22 @@ pub trait BodyModel: Send {
     fn rig(&self) -> Option<Rig<'_>> {
         None
     }
+    /// What the model changed after skinning (parts pressed apart where skinning passed them into
+    /// each other), over the poses so far; `None` when it changes nothing.
+    fn corrections(&self) -> Option<BodyCorrections> {
+        None
+    }
+}
+
+/// A body model's changes after skinning, over the poses it has made.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BodyCorrections {
+    /// Poses made.
+    pub poses: usize,
+    /// Vertices moved, summed over the poses.
+    pub moved: usize,
+    /// The deepest overlap of two parts found (m), before it was pressed out.
+    pub deepest: Real,
 }
 
 /// A skinned body's rig, borrowed: rest mesh, skeleton, global rest joint positions and four

@@ -63,6 +63,13 @@ pub struct Metrics {
     /// |fine path length - rest| / rest (when the scene refines).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub length_error: Option<Real>,
+    /// With `[effects] body_press`: body vertices pressed out of another part per pose (mean), and
+    /// the deepest overlap of two parts found before pressing (m). The GLB's body does not carry
+    /// the press (its joints alone animate it).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub body_pressed_per_pose: Option<Real>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub body_press_deepest_m: Option<Real>,
     /// Garment vertices moved out of the body when placing it on the rest pose.
     pub placement_moved: usize,
     /// Frames the referee judged (`[output] referee_every`); the figures above are over these.
@@ -320,6 +327,10 @@ impl Pipeline {
         stats.metrics.substep_retries = total.retries;
         stats.metrics.rollbacks = total.rollbacks;
         stats.metrics.max_body_parts = total.body_parts;
+        if let Some(c) = self.body.corrections() {
+            stats.metrics.body_pressed_per_pose = Some(c.moved as Real / c.poses.max(1) as Real);
+            stats.metrics.body_press_deepest_m = Some(c.deepest);
+        }
         if refines {
             stats.metrics.length_error = Some(length_sum / length_frames.max(1) as Real);
         }
