@@ -111,6 +111,12 @@ fn demo_runs_a_few_frames_stays_close_and_writes_outputs_that_read_back() {
     let doc = gltf::Gltf::from_slice(&glb).unwrap();
     assert_eq!(doc.skins().count(), 1);
     assert_eq!(doc.skins().next().unwrap().joints().count(), 22);
+    // The body press as the body's morph targets, one per frame (frame 0 included).
+    let body = doc.meshes().next().unwrap();
+    assert_eq!(
+        body.primitives().next().unwrap().morph_targets().count(),
+        11
+    );
     let garment = doc.meshes().nth(1).unwrap();
     assert_eq!(
         garment.primitives().next().unwrap().morph_targets().count(),

@@ -160,3 +160,58 @@ fn rest_pose_skins_to_the_rest_mesh_and_a_bent_pose_stays_finite() {
     };
     assert!(posed.validate().is_ok());
 }
+
+/// The press's moves carried back to the rest mesh (`skin_offsets_at`, what the GLB stores as the
+/// body's morph targets) skin to the pressed body: plain skinning of the offset rest mesh equals
+/// the pressed shape, with the arms swung into the torso so that the press has work to do.
+#[test]
+fn skin_offsets_skin_to_the_pressed_body() {
+    let m = Mannequin::new(&Measurements::default()).unwrap();
+    let (tris, _) = m.mesh.triangulate();
+    let mut body = SkinnedBody::new(
+        m.mesh.positions.clone(),
+        tris,
+        m.skeleton.clone(),
+        m.joint_rest.clone(),
+        m.skin.clone(),
+    );
+    // Parts by strongest joint: each arm from its upper arm down, the rest the torso.
+    let parts: Vec<u8> = (0..m.mesh.positions.len())
+        .map(|v| {
+            let (js, ws) = (m.skin.joints[v], m.skin.weights[v]);
+            let k = (0..4).max_by(|&a, &b| ws[a].total_cmp(&ws[b])).unwrap_or(0);
+            match js[k] {
+                7..=9 => 1,
+                11..=13 => 2,
+                _ => 0,
+            }
+        })
+        .collect();
+    body.press = Some(crate::press::Press { parts, gap: 0.004 });
+    let mut pose = Pose::rest(22);
+    for (j, angle) in [(7, -0.6), (11, 0.6), (8, -0.3), (12, 0.3)] {
+        pose.local_rotations[j] = UnitQuat::from_axis_angle(&Vec3::z_axis(), angle);
+    }
+    let mut pressed = Vec::new();
+    body.shape_at(&pose, &mut pressed);
+    let mut offsets = Vec::new();
+    body.skin_offsets_at(&pose, &mut offsets);
+    assert!(
+        offsets.len() > 20,
+        "the pose presses too little: {}",
+        offsets.len()
+    );
+    let mut plain = body.clone();
+    plain.press = None;
+    for &(v, d) in &offsets {
+        plain.rest_positions[v as usize] += d;
+    }
+    let mut skinned = Vec::new();
+    plain.skin_into(&pose, &mut skinned);
+    let worst = skinned
+        .iter()
+        .zip(&pressed)
+        .map(|(a, b)| (a - b).norm())
+        .fold(0.0, Real::max);
+    assert!(worst < 1e-9, "{worst}");
+}

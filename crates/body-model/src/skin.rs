@@ -182,6 +182,34 @@ impl BodyModel for SkinnedBody {
             press.apply(out, &self.triangles);
         }
     }
+    /// The press's moves in `pose`, carried back through each vertex's blended joint rotation to
+    /// the rest mesh: skinning the rest mesh plus these offsets gives the pressed body exactly
+    /// (linear blend skinning is linear in the rest position).
+    fn skin_offsets_at(&self, pose: &Pose, out: &mut Vec<(u32, Vec3)>) {
+        out.clear();
+        let Some(press) = &self.press else { return };
+        let mut x = Vec::new();
+        self.skin_into(pose, &mut x);
+        let plain = x.clone();
+        press.apply(&mut x, &self.triangles);
+        let (rot, _) = joint_transforms(&self.skeleton, &self.joint_rest, pose);
+        for (i, (a, b)) in x.iter().zip(&plain).enumerate() {
+            if a == b {
+                continue;
+            }
+            let (js, ws) = (&self.skin.joints[i], &self.skin.weights[i]);
+            let blend: Mat3 = (0..4)
+                .filter(|&k| ws[k] != 0.0)
+                .map(|k| rot[js[k] as usize] * ws[k])
+                .sum();
+            if let Some(inv) = blend.try_inverse() {
+                let d = inv * (a - b);
+                if d.iter().all(|c| c.is_finite()) {
+                    out.push((i as u32, d));
+                }
+            }
+        }
+    }
     fn rig(&self) -> Option<Rig<'_>> {
         Some(Rig {
             rest_positions: &self.rest_positions,

@@ -32,6 +32,12 @@ pub trait BodyModel: Send {
     fn rig(&self) -> Option<Rig<'_>> {
         None
     }
+    /// The offsets of the rest mesh's vertices (index, offset) that, skinned with `pose`, give
+    /// what the model adds after skinning (its press): an export's per-frame morph of a skinned
+    /// body. Empty when it adds nothing.
+    fn skin_offsets_at(&self, _pose: &Pose, out: &mut Vec<(u32, Vec3)>) {
+        out.clear();
+    }
     /// What the model changed after skinning (parts pressed apart where skinning passed them into
     /// each other), over the poses so far; `None` when it changes nothing.
     fn corrections(&self) -> Option<BodyCorrections> {

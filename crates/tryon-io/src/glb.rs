@@ -55,6 +55,10 @@ pub struct GlbHeader<'a> {
 pub struct FramePose<'a> {
     pub root_translation: Vec3,
     pub rotations: &'a [UnitQuat],
+    /// Offsets of rest-mesh vertices (index, offset) the body adds before skinning in this frame
+    /// (what the body press moved, carried to the rest pose): written as a sparse morph target
+    /// of the body, one per frame. Empty for none.
+    pub skin_offsets: &'a [(u32, Vec3)],
 }
 
 /// Why a GLB could not be written.
@@ -109,6 +113,8 @@ pub struct GlbWriter {
     /// Per frame and joint, the unit rotation in f32 (skinned bodies).
     pub(crate) rotations: Vec<[f32; 4]>,
     pub(crate) root_translations: Vec<Vec3>,
+    /// Per frame, the body's sparse morph (vertex, offset), by increasing vertex (skinned bodies).
+    pub(crate) body_targets: Vec<Vec<(u32, [f32; 3])>>,
     /// Frame 0's garment and its normals.
     pub(crate) base: Vec<Vec3>,
     pub(crate) base_normals: Vec<Vec3>,
@@ -183,6 +189,7 @@ impl GlbWriter {
             times: Vec::new(),
             rotations: Vec::new(),
             root_translations: Vec::new(),
+            body_targets: Vec::new(),
             base: Vec::new(),
             base_normals: Vec::new(),
             targets: Vec::new(),
@@ -234,6 +241,19 @@ impl GlbWriter {
                 f.map(|x| x / l)
             }));
             self.root_translations.push(pose.root_translation);
+            let n = self.body.positions.len();
+            let mut morph: Vec<(u32, [f32; 3])> = Vec::with_capacity(pose.skin_offsets.len());
+            for &(v, d) in pose.skin_offsets {
+                if v as usize >= n || !d.iter().all(|c| c.is_finite()) {
+                    return bad(format!(
+                        "a body offset of vertex {v} is past the last vertex or not finite"
+                    ));
+                }
+                morph.push((v, [d.x as f32, d.y as f32, d.z as f32]));
+            }
+            morph.sort_by_key(|e| e.0);
+            morph.dedup_by_key(|e| e.0);
+            self.body_targets.push(morph);
         }
         if self.times.is_empty() {
             if self

@@ -18,10 +18,11 @@ pub(crate) enum Piece {
         len: u64,
     },
     /// The morph weights animation: for each of `frames` frames, `targets` f32 weights, target
-    /// k - 1 at 1 in frame k.
+    /// k - `first` at 1 in frame k.
     Weights {
         frames: usize,
         targets: usize,
+        first: usize,
     },
 }
 
@@ -262,13 +263,20 @@ pub(crate) fn document(w: &GlbWriter, name: &str, d: &mut Doc) -> Value {
     let idx = d.indices(btris);
     let mut attrs = json!({"POSITION": pos, "NORMAL": nrm});
     rig(w, d, &mut a, &mut attrs, time_acc);
-    meshes.push(json!({"name": "body", "primitives": [{"attributes": attrs, "indices": idx, "material": 0}]}));
+    let mut prim = json!({"attributes": attrs, "indices": idx, "material": 0});
+    let mut body_mesh = json!({"name": "body"});
+    let morph = body_morphs(w, d, &mut prim, &mut body_mesh);
+    body_mesh["primitives"] = json!([prim]);
+    meshes.push(body_mesh);
     let mut body_node = json!({"name": "body", "mesh": 0});
     if !a.skins.is_empty() {
         body_node["skin"] = json!(0);
     }
     a.nodes.push(body_node);
     a.roots.push(a.nodes.len() - 1);
+    if let Some(out) = morph {
+        a.channel(time_acc, out, a.nodes.len() - 1, "weights");
+    }
     garment(w, d, &mut a, &mut meshes, time_acc);
     let mut doc = json!({
         "asset": {"version": "2.0", "generator": "tryon"},
@@ -289,6 +297,52 @@ pub(crate) fn document(w: &GlbWriter, name: &str, d: &mut Doc) -> Value {
             json!([{"name": "tryon", "channels": a.channels, "samplers": a.samplers}]);
     }
     doc
+}
+
+/// The body's per-frame sparse morph targets (what the press added, in the rest pose), when any
+/// frame has one: one target per frame, on in its frame; returns the weights' accessor.
+fn body_morphs(w: &GlbWriter, d: &mut Doc, prim: &mut Value, mesh: &mut Value) -> Option<usize> {
+    if w.body_targets.iter().all(Vec::is_empty) {
+        return None;
+    }
+    let n = w.body.positions.len();
+    let targets: Vec<Value> = w
+        .body_targets
+        .iter()
+        .map(|e| {
+            // Vertices left out are zero, so zero is within the bounds unless every one is listed.
+            let zero = if e.len() < n { 0.0 } else { f32::INFINITY };
+            let (mut lo, mut hi) = ([zero; 3], [-zero; 3]);
+            for (_, v) in e {
+                for k in 0..3 {
+                    lo[k] = lo[k].min(v[k]);
+                    hi[k] = hi[k].max(v[k]);
+                }
+            }
+            // A frame with nothing pressed still lists vertex 0 (at zero): readers such as the
+            // gltf crate refuse an accessor with neither a buffer view nor sparse values.
+            let zero = [(0u32, [0.0f32; 3])];
+            let e = if e.is_empty() { &zero[..] } else { &e[..] };
+            let ib: Vec<u8> = e.iter().flat_map(|(i, _)| i.to_le_bytes()).collect();
+            let vb: Vec<u8> = e.iter().flat_map(|(_, v)| v.map(f32::to_le_bytes)).flatten().collect();
+            let (iv, vv) = (d.view(ib, None), d.view(vb, None));
+            let sparse = json!({"count": e.len(), "indices": {"bufferView": iv, "componentType": 5125}, "values": {"bufferView": vv}});
+            let acc = json!({"componentType": 5126, "count": n, "type": "VEC3", "min": lo, "max": hi, "sparse": sparse});
+            json!({"POSITION": d.accessor(acc)})
+        })
+        .collect();
+    let (frames, t) = (w.times.len(), targets.len());
+    prim["targets"] = json!(targets);
+    mesh["weights"] = json!(vec![0.0f32; t]);
+    let piece = Piece::Weights {
+        frames,
+        targets: t,
+        first: 0,
+    };
+    let view = d.view_of(piece, 4 * (frames * t) as u64, None);
+    Some(d.accessor(
+        json!({"bufferView": view, "componentType": 5126, "count": frames * t, "type": "SCALAR"}),
+    ))
 }
 
 /// The garment: frame 0 is the base; every later frame is a morph target read from the spool.
@@ -323,7 +377,12 @@ fn garment(w: &GlbWriter, d: &mut Doc, a: &mut Anim, meshes: &mut Vec<Value>, ti
     if t > 0 {
         gmesh["weights"] = json!(vec![0.0f32; t]);
         let len = 4 * (frames * t) as u64;
-        let view = d.view_of(Piece::Weights { frames, targets: t }, len, None);
+        let piece = Piece::Weights {
+            frames,
+            targets: t,
+            first: 1,
+        };
+        let view = d.view_of(piece, len, None);
         weights_out = Some(d.accessor(json!({"bufferView": view, "componentType": 5126, "count": frames * t, "type": "SCALAR"})));
     }
     meshes.push(gmesh);
@@ -374,11 +433,19 @@ impl Layout {
                 Piece::Pad(n) => w.write_all(&vec![0u8; *n as usize])?,
                 Piece::Bytes(b) => w.write_all(b)?,
                 Piece::Spool { start, len } => spool(w, *start, *len)?,
-                Piece::Weights { frames, targets } => {
+                Piece::Weights {
+                    frames,
+                    targets,
+                    first,
+                } => {
                     for k in 0..*frames {
                         let row: Vec<u8> = (0..*targets)
                             .flat_map(|i| {
-                                let x: f32 = if k >= 1 && i == k - 1 { 1.0 } else { 0.0 };
+                                let x: f32 = if k >= *first && i == k - first {
+                                    1.0
+                                } else {
+                                    0.0
+                                };
                                 x.to_le_bytes()
                             })
                             .collect();

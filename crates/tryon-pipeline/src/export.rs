@@ -148,6 +148,7 @@ impl FrameSink for Outputs {
             let pose = rec.pose.as_ref().map(|p| FramePose {
                 root_translation: p.root_translation,
                 rotations: &p.local_rotations,
+                skin_offsets: &rec.skin_offsets,
             });
             glb.frame(rec.time, &rec.garment, pose);
         }
@@ -160,6 +161,10 @@ impl FrameSink for Outputs {
             }
         }
         self.frames += 1;
+    }
+
+    fn wants_skin_offsets(&self) -> bool {
+        self.glb.is_some()
     }
 }
 
@@ -192,7 +197,18 @@ impl Pipeline {
             rig: self.body.rig().filter(|_| moving && self.motion.is_some()),
         });
         for f in &run.frames {
-            out.frame(f);
+            // Frames kept in memory carry no skin offsets (that sink does not ask for them).
+            match (
+                &f.pose,
+                out.wants_skin_offsets() && f.skin_offsets.is_empty(),
+            ) {
+                (Some(pose), true) => {
+                    let mut with = f.clone();
+                    self.body.skin_offsets_at(pose, &mut with.skin_offsets);
+                    out.frame(&with);
+                }
+                _ => out.frame(f),
+            }
         }
         out.finish(self, &run.stats)
     }

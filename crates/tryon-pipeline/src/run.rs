@@ -21,6 +21,9 @@ pub struct FrameRecord {
     pub garment: Vec<Vec3>,
     /// The body's pose (a skinned body only).
     pub pose: Option<Pose>,
+    /// What the body adds after skinning in that pose (its press), as offsets of rest-mesh
+    /// vertices (`BodyModel::skin_offsets_at`); only when the sink asks for them.
+    pub skin_offsets: Vec<(u32, Vec3)>,
 }
 
 /// Counts of the scene's meshes.
@@ -128,6 +131,10 @@ pub trait FrameSink {
     fn begin(&mut self, _header: &RunHeader<'_>) {}
     /// Frame 0 is the garment as placed; then one record per simulated frame.
     fn frame(&mut self, record: &FrameRecord);
+    /// Whether records should carry the body's skin offsets (they cost a second skinning).
+    fn wants_skin_offsets(&self) -> bool {
+        false
+    }
 }
 
 /// Keeps every frame in memory.
@@ -226,10 +233,12 @@ impl Pipeline {
             body_triangles: &body_triangles,
             rig: self.body.rig().filter(|_| moving),
         });
+        let pose0 = moving.then(|| st.pose.clone());
         sink.frame(&FrameRecord {
             time: 0.0,
             garment: self.output_garment().to_vec(),
-            pose: moving.then(|| st.pose.clone()),
+            skin_offsets: self.skin_offsets(&*sink, pose0.as_ref()),
+            pose: pose0,
         });
         let mut total = StepReport::default();
         let (mut stretch_sum, mut share_sum) = (0.0, 0.0);
@@ -314,6 +323,7 @@ impl Pipeline {
             sink.frame(&FrameRecord {
                 time: t,
                 garment: output.clone(),
+                skin_offsets: self.skin_offsets(&*sink, pose.as_ref()),
                 pose,
             });
             timers.end_frame();
@@ -384,5 +394,16 @@ impl Pipeline {
         self.surface = surface;
         timers.absorb(&mut fine_timers);
         fresh
+    }
+}
+
+impl Pipeline {
+    /// The body's skin offsets in `pose`, when the sink asks for them.
+    fn skin_offsets(&self, sink: &dyn FrameSink, pose: Option<&Pose>) -> Vec<(u32, Vec3)> {
+        let mut out = Vec::new();
+        if let Some(p) = pose.filter(|_| sink.wants_skin_offsets()) {
+            self.body.skin_offsets_at(p, &mut out);
+        }
+        out
     }
 }

@@ -2,7 +2,7 @@
 //! offsets, a file writer and an in-memory writer give the same bytes, and bad frames are named.
 
 use super::*;
-use serde_json::Value;
+use serde_json::{Value, json};
 
 const TRI: [[u32; 3]; 1] = [[0, 1, 2]];
 
@@ -130,18 +130,58 @@ fn a_skinned_body_is_animated_per_joint() {
         UnitQuat::identity(),
         UnitQuat::from_axis_angle(&Vec3::z_axis(), 0.3),
     ];
+    // Frame 1 has the body's vertex 2 pressed 1 cm along x (a sparse morph target).
+    let pressed = [(2u32, Vec3::new(0.01, 0.0, 0.0))];
     for k in 0..3 {
         let pose = FramePose {
             root_translation: Vec3::new(0.1 * k as Real, 0.0, 0.0),
             rotations: &spin[..k.min(2)],
+            skin_offsets: if k == 1 { &pressed } else { &[] },
         };
         w.frame(k as Real, &frame(k), Some(pose));
     }
     let bytes = w.finish_to_vec().unwrap();
     let g = gltf::Gltf::from_slice(&bytes).unwrap();
     assert_eq!(g.skins().count(), 1);
-    // Two joint rotations, the root's translation, the garment's weights.
-    assert_eq!(g.animations().next().unwrap().channels().count(), 4);
+    // Two joint rotations, the root's translation, the body's and the garment's weights.
+    assert_eq!(g.animations().next().unwrap().channels().count(), 5);
+    let (json, bin) = chunks(&bytes);
+    let targets = json["meshes"][0]["primitives"][0]["targets"]
+        .as_array()
+        .unwrap();
+    assert_eq!(targets.len(), 3, "one body target per frame");
+    let acc = |t: usize| &json["accessors"][targets[t]["POSITION"].as_u64().unwrap() as usize];
+    // Frames with nothing pressed list vertex 0 at zero.
+    for t in [0, 2] {
+        assert_eq!(acc(t)["sparse"]["count"], 1);
+        assert_eq!(
+            (acc(t)["min"].clone(), acc(t)["max"].clone()),
+            (json!([0.0, 0.0, 0.0]), json!([0.0, 0.0, 0.0]))
+        );
+    }
+    let sparse = &acc(1)["sparse"];
+    assert_eq!(sparse["count"], 1);
+    let view = |v: &Value| {
+        let bv = &json["bufferViews"][v["bufferView"].as_u64().unwrap() as usize];
+        let at = bv["byteOffset"].as_u64().unwrap() as usize;
+        &bin[at..at + bv["byteLength"].as_u64().unwrap() as usize]
+    };
+    assert_eq!(view(&sparse["indices"]), 2u32.to_le_bytes());
+    let x: Vec<f32> = view(&sparse["values"])
+        .chunks(4)
+        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect();
+    assert_eq!(x, vec![0.01, 0.0, 0.0]);
+    let mut bad = GlbWriter::in_memory(&h).unwrap();
+    let far = [(7u32, Vec3::x())];
+    let pose = FramePose {
+        root_translation: Vec3::zeros(),
+        rotations: &spin,
+        skin_offsets: &far,
+    };
+    bad.frame(0.0, &frame(0), Some(pose));
+    let e = bad.finish_to_vec().unwrap_err();
+    assert!(e.to_string().contains("vertex 7"), "{e}");
     let mut no_pose = GlbWriter::in_memory(&h).unwrap();
     no_pose.frame(0.0, &frame(0), None);
     let e = no_pose.finish_to_vec().unwrap_err();
