@@ -128,17 +128,23 @@ fn weights_are_four_normalised_influences() {
     }
 }
 
-#[test]
-fn rest_pose_skins_to_the_rest_mesh_and_a_bent_pose_stays_finite() {
+/// The default mannequin and its skinned body (no press).
+fn skinned_mannequin() -> (Mannequin, SkinnedBody) {
     let m = Mannequin::new(&Measurements::default()).unwrap();
     let (tris, _) = m.mesh.triangulate();
-    let mut body = SkinnedBody::new(
+    let body = SkinnedBody::new(
         m.mesh.positions.clone(),
         tris,
         m.skeleton.clone(),
         m.joint_rest.clone(),
         m.skin.clone(),
     );
+    (m, body)
+}
+
+#[test]
+fn rest_pose_skins_to_the_rest_mesh_and_a_bent_pose_stays_finite() {
+    let (m, mut body) = skinned_mannequin();
     let mut frame = Default::default();
     body.pose(&Pose::rest(22), &mut frame);
     let tryon_core::frames::BodyFrame { positions, .. } = &frame;
@@ -166,15 +172,7 @@ fn rest_pose_skins_to_the_rest_mesh_and_a_bent_pose_stays_finite() {
 /// the pressed shape, with the arms swung into the torso so that the press has work to do.
 #[test]
 fn skin_offsets_skin_to_the_pressed_body() {
-    let m = Mannequin::new(&Measurements::default()).unwrap();
-    let (tris, _) = m.mesh.triangulate();
-    let mut body = SkinnedBody::new(
-        m.mesh.positions.clone(),
-        tris,
-        m.skeleton.clone(),
-        m.joint_rest.clone(),
-        m.skin.clone(),
-    );
+    let (m, mut body) = skinned_mannequin();
     // Parts by strongest joint: each arm from its upper arm down, the rest the torso.
     let parts: Vec<u8> = (0..m.mesh.positions.len())
         .map(|v| {
