@@ -431,11 +431,13 @@ fn bumpy_sphere(sub: u32, amp: Real, waves: Real) -> PolyMesh {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(24))]
+    #![proptest_config(ProptestConfig::with_cases(64))]
 
     /// On a body with concave folds (where P1's test alone misses points, and its push along one
     /// plane's normal can leave a point behind the fold's other side), resolution leaves nothing
-    /// deeper than a micrometre inside by the referee.
+    /// inside by the referee deeper than the convexity tolerance allows: a fan concave by less
+    /// than `FLAT` times an edge counts as convex (a few micrometres here; the fold it guards
+    /// against left points 2 mm inside).
     #[test]
     fn nothing_inside_a_concave_body_after_resolution(amp in 0.05..0.25f64, waves in 2.0..5.0f64, s in seeds()) {
         let m = bumpy_sphere(4, amp, waves);
@@ -450,13 +452,18 @@ proptest! {
                 q + Vec3::new(r[0], r[1], r[2]) * 0.03
             })
             .collect();
-        let inside_before = pts.iter().filter(|p| referee.signed_distance(p).unwrap() < -1e-6).count();
+        let longest = m.triangulate().0.iter().flat_map(|t| {
+            (0..3).map(|e| (m.positions[t[e] as usize] - m.positions[t[(e + 1) % 3] as usize]).norm())
+        }).fold(0.0, Real::max);
+        let tolerance = crate::tracker::FLAT * longest;
+        prop_assert!(tolerance < 1e-5);
+        let inside_before = pts.iter().filter(|p| referee.signed_distance(p).unwrap() < -tolerance).count();
         let mut contacts = Vec::new();
         tracker.resolve(&mut pts, &mut contacts);
         prop_assert!(contacts.len() >= inside_before, "{} contacts for {} points inside", contacts.len(), inside_before);
         for (k, p) in pts.iter().enumerate() {
             let d = referee.signed_distance(p).unwrap();
-            prop_assert!(d > -1e-6, "point {} still {} m inside", k, -d);
+            prop_assert!(d > -tolerance, "point {} still {} m inside (tolerance {})", k, -d, tolerance);
         }
     }
 
