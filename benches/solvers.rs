@@ -1,5 +1,6 @@
 //! Criterion benchmarks of the garment solvers' cloth step alone (`ClothSolver::step_frame`), on one
-//! thread and on two: VBD on the drape at N = 64 and 128, and on the MakeHuman walk (skipped when
+//! thread and on two: VBD on the drape at N = 64 and 128 (plain, and with its strain limit at rest
+//! length), and on the MakeHuman walk (skipped when
 //! the shared assets are absent). Each scene is run untimed to a frame in contact (the drape after
 //! 1 s, the walk at frame 30); every timed iteration then steps that same frame from the same cloth
 //! state against the same body, so one and two threads do the same work. The VBD sweep gives the
@@ -47,7 +48,7 @@ fn cloth_step(c: &mut Criterion) {
         .sample_size(10)
         .warm_up_time(Duration::from_secs(1))
         .measurement_time(Duration::from_secs(4));
-    let cases: [(&str, &str, &[&str], usize); 3] = [
+    let cases: [(&str, &str, &[&str], usize); 5] = [
         (
             "vbd_drape_64",
             "drape-sphere.toml",
@@ -58,6 +59,26 @@ fn cloth_step(c: &mut Criterion) {
             "vbd_drape_128",
             "drape-sphere.toml",
             &["cloth.solver=\"vbd\"", "garment.particles=128"],
+            60,
+        ),
+        (
+            "vbd_limit_drape_64",
+            "drape-sphere.toml",
+            &[
+                "cloth.solver=\"vbd\"",
+                "garment.particles=64",
+                "cloth.vbd_limit=1.0",
+            ],
+            60,
+        ),
+        (
+            "vbd_limit_drape_128",
+            "drape-sphere.toml",
+            &[
+                "cloth.solver=\"vbd\"",
+                "garment.particles=128",
+                "cloth.vbd_limit=1.0",
+            ],
             60,
         ),
         ("vbd_makehuman_walk", "makehuman-dress-walk.toml", &[], 30),

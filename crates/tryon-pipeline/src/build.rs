@@ -329,6 +329,8 @@ pub fn solver(
                 stretch: c.vbd_stretch,
                 contact: c.vbd_contact,
                 swept: c.vbd_swept,
+                limit: c.vbd_limit,
+                limit_passes: c.vbd_limit_passes,
                 ..VbdParams::default()
             };
             Box::new(VbdSim::new(model, p, v, c.thickness))

@@ -22,7 +22,7 @@ const PAR_CHUNK: usize = 32;
 use crate::model::{ClothModel, Handle};
 use crate::params::ClothParams;
 use crate::retry::frame_with_retries;
-use crate::strain::Tethers;
+use crate::strain::{ContactPlane, Tethers, limit_strain};
 use rayon::prelude::*;
 use tryon_core::frames::{CoarseFrame, Contact, StepReport};
 use tryon_core::math::{Mat3, Real, Vec3, is_finite};
@@ -53,6 +53,12 @@ pub struct VbdParams {
     /// crosses the body inward is stopped on the surface it hit, and held there by a second
     /// contact plane in the next step.
     pub swept: bool,
+    /// Provot's strain limit after the sweeps, a ratio of rest length (0: off). On a free-hanging
+    /// sheet it holds the stretch the sweeps leave; on garments pressed to a body it fights the
+    /// contact planes and made every real run worse (docs/decisions.md), so it is off by default.
+    pub limit: Real,
+    /// Passes of that limit per step.
+    pub limit_passes: u32,
 }
 
 impl Default for VbdParams {
@@ -66,6 +72,8 @@ impl Default for VbdParams {
             stick_speed: 0.01,
             reach: 0.03,
             swept: true,
+            limit: 0.0,
+            limit_passes: 8,
         }
     }
 }
@@ -131,6 +139,8 @@ pub struct VbdSim {
     /// contact plane for the next step, so the solve holds it there with its neighbours instead
     /// of pulling it back through (`None` when it was not stopped).
     held: Vec<Option<Plane>>,
+    /// The contact planes the strain limit keeps particles outside of.
+    limit_planes: Vec<ContactPlane>,
 }
 
 impl VbdSim {
@@ -205,6 +215,7 @@ impl VbdSim {
             stopped: Vec::new(),
             spring_sum,
             held: vec![None; n],
+            limit_planes: Vec::new(),
         }
     }
 
@@ -343,6 +354,37 @@ impl VbdSim {
         .map_or([Vec3::zeros(); 2], |(a, b)| [a, b])
     }
 
+    /// Provot's limit after the sweeps (`VbdParams::limit`), each contact particle kept on the
+    /// outer side of its planes: ten sweeps leave a free-hanging sheet stretched (the drape at
+    /// N = 64 1.31, at N = 128 2.87), a few passes carry the tension at once.
+    fn limit(&mut self, x: &mut [Vec3]) {
+        if self.vbd.limit <= 0.0 {
+            return;
+        }
+        self.limit_planes.clear();
+        for i in 0..x.len() {
+            let planes = [self.planes[i], self.opposite[i], self.held[i]];
+            for pl in planes.into_iter().flatten() {
+                self.limit_planes.push(ContactPlane {
+                    point: i as u32,
+                    normal: pl.normal,
+                    offset: pl.normal.dot(&pl.point) + self.thickness,
+                });
+            }
+        }
+        let (ratio, passes) = (self.vbd.limit, self.vbd.limit_passes);
+        limit_strain(
+            &self.model,
+            ratio,
+            passes,
+            1.0,
+            x,
+            &self.limit_planes,
+            None,
+            None,
+        );
+    }
+
     /// The descent sweeps of one step.
     fn solve(&mut self, x: &mut [Vec3], h: Real) {
         let tethers = self.params.tethers && !self.model.handles.is_empty();
@@ -394,6 +436,7 @@ impl VbdSim {
         self.begin(frame, t0 + h, h, collider);
         let mut x = std::mem::take(&mut frame.positions);
         self.solve(&mut x, h);
+        self.limit(&mut x);
         self.fail_safe(&mut x, span, collider);
         frame.positions = x;
         let max2 = self.params.max_speed * self.params.max_speed;

@@ -143,6 +143,17 @@ impl Scene {
                 "0 (off) or a ratio in [1, 2]",
             ));
         }
+        let x = c.vbd_limit;
+        if !(x == 0.0 || (x.is_finite() && (1.0..=2.0).contains(&x))) {
+            return Err(bad(
+                text,
+                file,
+                "cloth",
+                "vbd_limit",
+                x.to_string(),
+                "0 (off) or a ratio in [1, 2]",
+            ));
+        }
         if let Some(x) = c.stretch_guard
             && !(x == 0.0 || (x.is_finite() && x > 1.0 && x <= 10.0))
         {

@@ -85,6 +85,12 @@ pub struct ClothSection {
     /// The `vbd` solver's swept (continuous) body collision: a particle whose path in a step
     /// crosses the body's surface inward is stopped on it, however thin the part.
     pub vbd_swept: bool,
+    /// The `vbd` solver's strain limit after its sweeps, 0 (off) or a ratio of rest length in
+    /// [1, 2]: holds a free-hanging sheet's stretch (the drape); made garments on a body worse.
+    pub vbd_limit: Real,
+    /// Passes of the `vbd` solver's strain limit per step.
+    #[schemars(range(min = 1, max = 100))]
+    pub vbd_limit_passes: u32,
 }
 
 impl Default for ClothSection {
@@ -117,6 +123,8 @@ impl Default for ClothSection {
             vbd_stretch: vbd.stretch,
             vbd_contact: vbd.contact,
             vbd_swept: vbd.swept,
+            vbd_limit: vbd.limit,
+            vbd_limit_passes: vbd.limit_passes,
         }
     }
 }

@@ -191,3 +191,26 @@ fn the_reference_lists_every_kind_and_its_keys() {
         ["still", "walk", "arm_raise", "bvh"]
     );
 }
+
+#[test]
+fn a_ratio_with_an_off_value_refuses_what_lies_between_and_says_what_is_allowed() {
+    for (key, bad) in [
+        ("vbd_limit", "0.5"),
+        ("vbd_limit", "2.5"),
+        ("max_strain", "0.9"),
+    ] {
+        let text = minimal("cloth", None, &format!("{key} = {bad}\n"));
+        let e = Scene::parse(&text, Path::new("m.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains(&format!("cloth.{key}")) && e.contains("0 (off) or a ratio in [1, 2]"),
+            "{key} = {bad}: {e}"
+        );
+    }
+    for good in ["0", "1.0", "1.1"] {
+        let text = minimal("cloth", None, &format!("vbd_limit = {good}\n"));
+        let s = Scene::parse(&text, Path::new("m.toml")).unwrap();
+        assert_eq!(s.cloth.vbd_limit, good.parse::<f64>().unwrap());
+    }
+}
