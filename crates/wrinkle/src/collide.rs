@@ -6,9 +6,14 @@ use tryon_core::frames::{CoarseFrame, FineSurface, lattice_index, lattice_len};
 use tryon_core::math::{Real, Vec3, unit, vertex_normals};
 use tryon_core::stages::Collider;
 
+/// The distance bound of a vertex the collider knows nothing about (`Probe::FAR`): the
+/// nearest-vertex tracker says so only beyond its cull margin (5 cm) of the body's box.
+const UNKNOWN_FAR: Real = 0.05;
+
 impl Detail {
-    /// Probes the vertices in `self.which`, raises those within `skin` of the body and marks those
-    /// within `margin` as touching. Returns how many were raised.
+    /// Probes the vertices in `self.which` and raises those within `skin` of the body. Each
+    /// probed vertex's distance becomes its bound in `self.near` (0 once raised). Returns how many
+    /// were raised.
     pub(crate) fn probe_and_raise(
         &mut self,
         fine: &mut FineSurface,
@@ -28,8 +33,12 @@ impl Detail {
             for (k, &v) in self.which.iter().enumerate() {
                 let pr = self.probes[k];
                 let v = v as usize;
-                if pass == 0 && pr.distance < margin {
-                    self.touched[v] = self.stamp;
+                if pass == 0 {
+                    self.near[v] = if pr.distance.is_finite() {
+                        pr.distance
+                    } else {
+                        UNKNOWN_FAR
+                    };
                 }
                 if !(pr.distance < skin)
                     || !pr.distance.is_finite()
@@ -37,6 +46,7 @@ impl Detail {
                 {
                     continue;
                 }
+                self.near[v] = 0.0;
                 let need = skin - pr.distance;
                 let n = self.control[v];
                 let along = n.dot(&pr.normal);
@@ -61,7 +71,11 @@ impl Detail {
         raised
     }
 
-    /// P1.4.2: hierarchical fine penetration removal (see the crate docs).
+    /// P1.4.2: hierarchical fine penetration removal (see the crate docs). Level 0 probes every
+    /// coarse vertex; each finer level's vertex is probed only when the body may be within
+    /// `margin` of it: its distance is at least either parent's (the two vertices of the coarser
+    /// level whose edge it halves) less its distance from that parent, and a contact's or raised
+    /// vertex's bound is 0.
     pub fn fine_collision(
         &mut self,
         coarse: &CoarseFrame,
@@ -71,66 +85,63 @@ impl Detail {
         if self.reference.len() != fine.positions.len() {
             self.take_reference(fine);
         }
-        self.stamp = self.stamp.wrapping_add(1).max(1);
-        let stamp = self.stamp;
-        let mut probed = 0;
-        let mut raised = 0;
-        // Level 0: every coarse vertex (contacts count as touching).
+        self.near.clear();
+        self.near.resize(fine.positions.len(), UNKNOWN_FAR);
         self.which.clear();
         self.which.extend(0..self.coarse_vertices as u32);
-        probed += self.which.len();
-        raised += self.probe_and_raise(fine, collider);
+        let mut probed = self.which.len();
+        let mut raised = self.probe_and_raise(fine, collider);
         for c in &coarse.contacts {
             if (c.point as usize) < self.coarse_vertices {
-                self.touched[c.point as usize] = stamp;
+                self.near[c.point as usize] = 0.0;
             }
         }
         let n = self.n;
-        let per = lattice_len(n);
-        let level = n.trailing_zeros();
-        let faces: Vec<usize> = (0..self.coarse_tris.len())
-            .filter(|&f| {
-                self.coarse_tris[f]
-                    .iter()
-                    .any(|&v| self.touched[v as usize] == stamp)
-            })
-            .collect();
-        let mut visited = vec![false; 0];
-        visited.resize(fine.positions.len(), false);
-        for l in 1..=level {
-            let s = n >> l; // step of the level-l lattice
-            self.which.clear();
-            for &f in &faces {
-                let lat = &self.lattice[f * per..(f + 1) * per];
-                let at = |i: u32, j: u32| lat[lattice_index(n, i, j)] as usize;
-                let mut j = 0;
-                while j <= n {
-                    let mut i = 0;
-                    while i + j <= n {
-                        let (oi, oj) = ((i / s) % 2 == 1, (j / s) % 2 == 1);
-                        if oi || oj {
-                            let (a, b) = match (oi, oj) {
-                                (true, false) => (at(i - s, j), at(i + s, j)),
-                                (false, true) => (at(i, j - s), at(i, j + s)),
-                                _ => (at(i + s, j - s), at(i - s, j + s)),
-                            };
-                            let v = at(i, j);
-                            if !visited[v] && (self.touched[a] == stamp || self.touched[b] == stamp)
-                            {
-                                visited[v] = true;
-                                self.which.push(v as u32);
-                            }
-                        }
-                        i += s;
-                    }
-                    j += s;
-                }
-            }
+        let mut visited = vec![false; fine.positions.len()];
+        for l in 1..=n.trailing_zeros() {
+            self.select_level(n >> l, &fine.positions, &mut visited);
             probed += self.which.len();
             raised += self.probe_and_raise(fine, collider);
         }
         self.stats.probed = probed;
         self.stats.raised = raised;
+    }
+
+    /// The vertices of the level whose lattice step is `s` that the body may be within `margin`
+    /// of, into `self.which`; the others get their bound from their parents.
+    fn select_level(&mut self, s: u32, x: &[Vec3], visited: &mut [bool]) {
+        let (n, margin) = (self.n, self.params.margin);
+        let per = lattice_len(n);
+        self.which.clear();
+        for f in 0..self.coarse_tris.len() {
+            let lat = &self.lattice[f * per..(f + 1) * per];
+            let at = |i: u32, j: u32| lat[lattice_index(n, i, j)] as usize;
+            let mut j = 0;
+            while j <= n {
+                let mut i = 0;
+                while i + j <= n {
+                    let (oi, oj) = ((i / s) % 2 == 1, (j / s) % 2 == 1);
+                    let v = at(i, j);
+                    if (oi || oj) && !visited[v] {
+                        visited[v] = true;
+                        let (a, b) = match (oi, oj) {
+                            (true, false) => (at(i - s, j), at(i + s, j)),
+                            (false, true) => (at(i, j - s), at(i, j + s)),
+                            _ => (at(i + s, j - s), at(i - s, j + s)),
+                        };
+                        let bound = (self.near[a] - (x[v] - x[a]).norm())
+                            .max(self.near[b] - (x[v] - x[b]).norm());
+                        if bound < margin {
+                            self.which.push(v as u32);
+                        } else {
+                            self.near[v] = bound;
+                        }
+                    }
+                    i += s;
+                }
+                j += s;
+            }
+        }
     }
 
     /// P1.4.4: blends the deformed surface's normals with the PN normals by height (eqs. 13-14).

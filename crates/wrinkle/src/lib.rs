@@ -17,10 +17,12 @@
 //!   vertices may differ in height only as far as keeps their edge within `max_fine_stretch` of its
 //!   length on the reference surface; a coarse triangle whose three edges are all longer than rest
 //!   gets no wrinkle inside.
-//! - [`Detail::fine_collision`] (P1.4.2): hierarchical from the coarse contacts. Coarse triangles
-//!   none of whose corners touches the body (a contact this frame, or within `margin`) are skipped;
-//!   inside the others the lattice is probed level by level, a vertex only when one of the two
-//!   vertices of the coarser level whose edge it halves touched. A vertex inside the body, or within
+//! - [`Detail::fine_collision`] (P1.4.2): hierarchical from the coarse contacts. The lattice is
+//!   probed level by level, a vertex only when the body may be within `margin` of it, judged from
+//!   the two vertices of the coarser level whose edge it halves: its distance is at least theirs
+//!   less its distance from them, and a contact's or raised vertex's is taken as 0. (P1 probes
+//!   below touched vertices only; a coarse triangle spanning a thigh or an arm with its corners
+//!   beyond `margin` cut into it between them.) A vertex inside the body, or within
 //!   `skin` of it, is raised along its control direction until it is `skin` out (`dh_penetration`).
 //!   This height is not carried to the next frame (carrying it would leave bumps where the body was);
 //!   the wrinkle height is.
@@ -55,7 +57,7 @@ pub struct DetailParams {
     pub dt: Real,
     /// Distance fine vertices keep from the body (m).
     pub skin: Real,
-    /// A vertex within this distance of the body "touches" it, and the lattice below it is probed (m).
+    /// A finer level's vertex is probed where the body may be within this distance of it (m).
     pub margin: Real,
     /// Longest a fine edge may get through height differences, over its reference length.
     pub max_fine_stretch: Real,
@@ -171,8 +173,8 @@ pub struct Detail {
     required_vertex: Vec<Real>,
     weights: Vec<Real>,
     new_height: Vec<Real>,
-    touched: Vec<u32>,
-    stamp: u32,
+    /// Per fine vertex, a lower bound of its distance to the body this frame (`fine_collision`).
+    near: Vec<Real>,
     which: Vec<u32>,
     probes: Vec<Probe>,
     deformed_normals: Vec<Vec3>,
@@ -444,8 +446,7 @@ impl Detail {
             required_vertex: Vec::new(),
             weights: Vec::new(),
             new_height: Vec::new(),
-            touched: vec![0; m],
-            stamp: 0,
+            near: vec![0.0; m],
             which: Vec::new(),
             probes: Vec::new(),
             deformed_normals: Vec::new(),

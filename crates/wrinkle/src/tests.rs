@@ -294,6 +294,50 @@ fn fine_collision_lifts_the_lattice_out_of_a_sphere() {
     assert!(fine.normals.iter().all(|n| (n.norm() - 1.0).abs() < 1e-9));
 }
 
+/// One coarse triangle whose corners are 12 mm off a 4 cm ball (beyond the 1 cm margin), but
+/// which spans it: its flat lattice cuts up to 14 mm into it between them. P1's rule (probe
+/// only below a touching vertex) probes none of them; the distance bound from the corners finds
+/// them all. (The demo's first walking frame had such an edge midpoint 2.3 mm inside a thigh.)
+#[test]
+fn a_triangle_spanning_a_small_part_is_probed_though_its_corners_are_clear() {
+    let (r, rho, lift): (Real, Real, Real) = (0.04, 0.045, 0.012);
+    let h = ((r + lift) * (r + lift) - rho * rho).sqrt();
+    let x: Vec<Vec3> = (0..3)
+        .map(|k| {
+            let a = std::f64::consts::TAU * k as Real / 3.0;
+            Vec3::new(rho * a.cos(), h, rho * a.sin())
+        })
+        .collect();
+    let mesh = PolyMesh::from_triangles(x.clone(), &[[0, 2, 1]]).unwrap();
+    let ball = Sphere {
+        c: Vec3::zeros(),
+        r,
+    };
+    let mut fine = linear_fine(&mesh, &x, 2);
+    let depth = |f: &FineSurface| {
+        f.positions
+            .iter()
+            .map(|p| -ball.signed_distance(p).unwrap())
+            .fold(Real::NEG_INFINITY, Real::max)
+    };
+    assert!(x.iter().all(|p| ball.signed_distance(p).unwrap() > 0.011));
+    assert!(depth(&fine) > 0.010, "starts {} m deep", depth(&fine));
+    let params = DetailParams {
+        wrinkles: false,
+        ..DetailParams::default()
+    };
+    let mut d = Detail::new(&fine, &mesh.positions, params).unwrap();
+    let mut col = Sphere {
+        c: Vec3::zeros(),
+        r,
+    };
+    let coarse = frame(&x, vec![Vec3::zeros(); 3]);
+    d.wrinkle(&coarse, &mut fine);
+    d.fine_collision(&coarse, &mut fine, &mut col);
+    assert!(depth(&fine) < 1e-6, "left {} m deep", depth(&fine));
+    assert!(d.stats.raised > 0);
+}
+
 #[test]
 fn bad_parameters_and_layouts_are_named() {
     let mesh = grid_xz(2, 2, 1.0, 1.0, 0.0);

@@ -230,8 +230,8 @@ pub struct EffectsSection {
     /// Distance fine vertices keep from the body (m).
     #[schemars(range(min = 0.0, max = 0.05))]
     pub fine_skin: Real,
-    /// Fine vertices within this distance of the body count as touching it (m; at least
-    /// `fine_skin`).
+    /// Fine collision probes a finer level's vertex where the body may be within this distance
+    /// of it, bounded from its coarser neighbours' distances (m; at least `fine_skin`).
     #[schemars(range(min = 0.0, max = 0.2))]
     pub fine_margin: Real,
     /// Longest a fine edge may get through wrinkle height differences, over its reference length.
