@@ -197,6 +197,7 @@ fn a_ratio_with_an_off_value_refuses_what_lies_between_and_says_what_is_allowed(
     for (key, bad) in [
         ("vbd_limit", "0.5"),
         ("vbd_limit", "2.5"),
+        ("vbd_limit", "nan"),
         ("max_strain", "0.9"),
     ] {
         let text = minimal("cloth", None, &format!("{key} = {bad}\n"));
