@@ -74,6 +74,9 @@ impl Scene {
                 };
                 let expected = if k.len.is_some() {
                     k.allowed()
+                } else if k.min.is_none() && k.max.is_none() {
+                    // Its own rule (checked after) says more; a non-finite value fails here first.
+                    "a finite number".to_string()
                 } else {
                     format!("a number in {}", k.allowed())
                 };
