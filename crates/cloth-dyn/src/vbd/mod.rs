@@ -11,6 +11,7 @@
 //! kinetic above), bounded by the penalty's normal force. The collider's projection runs after the
 //! solve as a fail-safe only.
 
+mod bending;
 pub mod colour;
 mod contact;
 mod pairs;
@@ -37,8 +38,13 @@ pub struct VbdParams {
     pub iterations: u32,
     /// Stretch and shear stiffness per spring (N/m times rest length: k = this / rest).
     pub stretch: Real,
-    /// Flexion spring stiffness (same units).
+    /// Flexion spring stiffness (same units): P1's bending, a spring across each pair of faces;
+    /// 0 leaves them out.
     pub bend: Real,
+    /// Bending rigidity (N m) of the hinges toward the rest dihedral angles (`bending.rs`); 0
+    /// (the default) leaves them out. The MakeHuman scenes use 1e-3 without flexion springs
+    /// (docs/decisions.md): a modelled garment keeps the side of its folds and curves.
+    pub dihedral: Real,
     /// Contact stiffness (N/m). It must dominate the springs a particle hangs from: at 1e4 the
     /// stretch springs (5e3 / 2 cm = 2.5e5 N/m on a MakeHuman garment) dragged sleeves into the
     /// arms (85 mm on makehuman-dress-walk); at 1e6, 41 mm at worst, p99 3.3 mm.
@@ -68,6 +74,7 @@ impl Default for VbdParams {
             iterations: 10,
             stretch: 5e3,
             bend: 5.0,
+            dihedral: 0.0,
             contact: 1e6,
             stick_speed: 0.01,
             reach: 0.03,
@@ -100,6 +107,8 @@ pub struct VbdSim {
     pub model: ClothModel,
     pub params: ClothParams,
     pub vbd: VbdParams,
+    /// Hinges toward the rest dihedral angles.
+    hinges: bending::Hinges,
     /// Springs per vertex (CSR).
     offsets: Vec<u32>,
     arms: Vec<Arm>,
@@ -156,6 +165,9 @@ impl VbdSim {
             } else {
                 vbd.stretch
             };
+            if per_rest == 0.0 {
+                continue;
+            }
             let k_s = per_rest / rest.max(1e-6);
             lists[i as usize].push(Arm {
                 other: j,
@@ -183,13 +195,17 @@ impl VbdSim {
                 _ => pairs::Ring::new(&offsets, &arms, b, rest, params.rest_scale),
             })
             .collect();
-        let (order, colours) = colour::vertices(&pairs::neighbours(&offsets, &arms, &blocks));
+        let hinges = bending::Hinges::new(rest, &model.triangles, vbd.dihedral);
+        let mut neighbours = pairs::neighbours(&offsets, &arms, &blocks);
+        hinges.add_neighbours(&blocks, &mut neighbours);
+        let (order, colours) = colour::vertices(&neighbours);
         let spring_sum = lists.iter().map(|l| l.iter().map(|a| a.k).sum()).collect();
         let z = vec![Vec3::zeros(); n];
         VbdSim {
             model,
             params,
             vbd,
+            hinges,
             offsets,
             arms,
             targets: vec![Vec3::zeros(); blocks.len()],
@@ -270,6 +286,7 @@ impl VbdSim {
         }
         let prev = std::mem::take(&mut self.prev);
         self.pinches(&prev, collider);
+        self.hinges.begin(&prev);
         self.prev = prev;
     }
 
@@ -305,6 +322,7 @@ impl VbdSim {
             o[4] += s * d.y * d.z;
             o[5] += s * d.z * d.z;
         }
+        self.hinges.add(i, &mut f, &mut o);
         let mut hess = Mat3::new(
             o[0] + iso,
             o[1],
@@ -392,36 +410,50 @@ impl VbdSim {
             self.tethers.compute(&self.model);
             self.tethers_stale = false;
         }
+        if !self.hinges.is_empty() {
+            // The sweeps start from the inertial guess, not from the step's start.
+            self.hinges.refresh(x, &self.prev);
+        }
         let mut dx = std::mem::take(&mut self.dx);
         for _ in 0..self.vbd.iterations.max(1) {
             for r in self.colours.clone() {
-                self.sweep_colour(x, &self.order[r], h, &mut dx);
+                self.sweep_colour(x, &self.order[r.clone()], h, &mut dx);
+                self.apply(x, r, &dx);
             }
             if tethers {
                 self.tethers.project(1.0, x);
+                if !self.hinges.is_empty() {
+                    self.hinges.refresh(x, &self.prev);
+                }
             }
         }
         self.dx = dx;
     }
 
-    /// One Newton step on every vertex of one colour: the steps are found in parallel (no two
-    /// vertices of a colour share a spring, so each reads only vertices it does not write) and
-    /// applied after, so the result is the same for any number of threads.
-    fn sweep_colour(&self, x: &mut [Vec3], ids: &[u32], h: Real, dx: &mut Vec<[Vec3; 2]>) {
+    /// Moves the blocks of colour range `r` by their steps `dx` (non-finite steps are dropped),
+    /// and their hinges' angles with them.
+    fn apply(&mut self, x: &mut [Vec3], r: std::ops::Range<usize>, dx: &[[Vec3; 2]]) {
+        for (d, &b) in dx.iter().zip(&self.order[r]) {
+            for (dv, &v) in d.iter().zip(&self.blocks[b as usize]) {
+                if v != pairs::ALONE && is_finite(dv) {
+                    x[v as usize] += dv;
+                    self.hinges.moved(v as usize, dv);
+                }
+            }
+        }
+    }
+
+    /// One Newton step on every vertex of one colour, into `dx`: the steps are found in parallel
+    /// (no two vertices of a colour share a spring or a hinge, so each reads only vertices it does
+    /// not move) and applied after (`apply`), so the result is the same for any number of threads.
+    fn sweep_colour(&self, x: &[Vec3], ids: &[u32], h: Real, dx: &mut Vec<[Vec3; 2]>) {
         dx.clear();
         dx.resize(ids.len(), [Vec3::zeros(); 2]);
-        let xs: &[Vec3] = x;
+        let xs = x;
         dx.par_iter_mut()
             .with_min_len(PAR_CHUNK)
             .zip(ids.par_iter())
             .for_each(|(d, &b)| *d = self.descend(xs, b as usize, h));
-        for (d, &b) in dx.iter().zip(ids) {
-            for (dv, &v) in d.iter().zip(&self.blocks[b as usize]) {
-                if v != pairs::ALONE && is_finite(dv) {
-                    x[v as usize] += dv;
-                }
-            }
-        }
     }
 
     /// One step of `h` from `t0`, during which the body covers the fraction `span` of its last

@@ -408,3 +408,67 @@ fn the_strain_limit_holds_a_draped_sheet_that_the_sweeps_leave_stretched() {
     assert!(plain > 1.05, "without the limit: {plain}");
     assert!(limited < 1.03, "with the limit: {limited}");
 }
+
+/// Two unit squares folded by 45 degrees along the z axis (the second rising toward +y), the
+/// first pinned, the second started mirrored through the first's plane (sinking toward -y):
+/// every flexion spring is then at its rest length, so only the rest dihedral angle can tell the
+/// fold's side. Returns the free wing's lowest y after three seconds.
+fn mirrored_fold_after_three_seconds(vbd: VbdParams) -> Real {
+    use std::f64::consts::FRAC_1_SQRT_2;
+    let mesh = PolyMesh {
+        positions: vec![
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(0.0, 0.0, 1.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 1.0),
+            Vec3::new(-FRAC_1_SQRT_2, FRAC_1_SQRT_2, 0.0),
+            Vec3::new(-FRAC_1_SQRT_2, FRAC_1_SQRT_2, 1.0),
+        ],
+        faces: vec![
+            tryon_core::mesh::Face::Quad([0, 1, 3, 2]),
+            tryon_core::mesh::Face::Quad([0, 4, 5, 1]),
+        ],
+    };
+    let pins = (0..4)
+        .map(|p| Handle {
+            particle: p,
+            path: vec![(0.0, mesh.positions[p as usize])],
+        })
+        .collect();
+    let params = ClothParams {
+        gravity: Vec3::zeros(),
+        velocity_damping: 2.0,
+        ..ClothParams::default()
+    };
+    let mut s = sim(&mesh, params, vbd, pins);
+    let mut f = s.initial_frame();
+    for i in [4, 5] {
+        f.positions[i].y = -f.positions[i].y;
+    }
+    for _ in 0..90 {
+        s.step_frame(&mut f, 1.0 / 30.0, &mut NoCollider);
+    }
+    assert!(f.positions.iter().all(is_finite));
+    f.positions[4].y.min(f.positions[5].y)
+}
+
+#[test]
+fn a_fold_pushed_through_to_its_other_side_returns_to_its_modelled_side() {
+    let springs_only = mirrored_fold_after_three_seconds(VbdParams {
+        bend: 5.0,
+        dihedral: 0.0,
+        ..VbdParams::default()
+    });
+    assert!(
+        springs_only < -0.6,
+        "flexion springs alone: the wing at y = {springs_only}"
+    );
+    let dihedral = mirrored_fold_after_three_seconds(VbdParams {
+        dihedral: 0.1,
+        ..VbdParams::default()
+    });
+    assert!(
+        dihedral > 0.6,
+        "with the rest dihedral angles: the wing at y = {dihedral}"
+    );
+}
