@@ -48,7 +48,7 @@ fn cloth_step(c: &mut Criterion) {
         .sample_size(10)
         .warm_up_time(Duration::from_secs(1))
         .measurement_time(Duration::from_secs(4));
-    let cases: [(&str, &str, &[&str], usize); 5] = [
+    let cases: [(&str, &str, &[&str], usize); 6] = [
         (
             "vbd_drape_64",
             "drape-sphere.toml",
@@ -82,6 +82,12 @@ fn cloth_step(c: &mut Criterion) {
             60,
         ),
         ("vbd_makehuman_walk", "makehuman-dress-walk.toml", &[], 30),
+        (
+            "vbd_makehuman_walk_flexion",
+            "makehuman-dress-walk.toml",
+            &["cloth.vbd_dihedral=0", "cloth.vbd_flexion=5"],
+            30,
+        ),
     ];
     for (name, file, sets, frames) in cases {
         let Some(mut p) = ready(file, sets, frames) else {

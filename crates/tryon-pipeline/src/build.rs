@@ -327,6 +327,8 @@ pub fn solver(
                 substep: c.vbd_substep,
                 iterations: c.vbd_iterations,
                 stretch: c.vbd_stretch,
+                bend: c.vbd_flexion,
+                dihedral: c.vbd_dihedral,
                 contact: c.vbd_contact,
                 swept: c.vbd_swept,
                 limit: c.vbd_limit,

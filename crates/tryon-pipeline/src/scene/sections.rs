@@ -79,6 +79,14 @@ pub struct ClothSection {
     /// The `vbd` solver's stretch and shear stiffness (N/m times rest length).
     #[schemars(range(min = 1.0, max = 1e9))]
     pub vbd_stretch: Real,
+    /// The `vbd` solver's flexion springs (P1's bending: a spring across each pair of faces),
+    /// stiffness in N/m times rest length; 0 leaves them out.
+    #[schemars(range(min = 0.0, max = 1e6))]
+    pub vbd_flexion: Real,
+    /// The `vbd` solver's bending rigidity (N m) toward the rest shape's dihedral angles, so a
+    /// modelled garment keeps its curves and a fold its side; 0 leaves it out.
+    #[schemars(range(min = 0.0, max = 1.0))]
+    pub vbd_dihedral: Real,
     /// The `vbd` solver's contact stiffness (N/m).
     #[schemars(range(min = 1.0, max = 1e9))]
     pub vbd_contact: Real,
@@ -121,6 +129,8 @@ impl Default for ClothSection {
             vbd_substep: vbd.substep,
             vbd_iterations: vbd.iterations,
             vbd_stretch: vbd.stretch,
+            vbd_flexion: vbd.bend,
+            vbd_dihedral: vbd.dihedral,
             vbd_contact: vbd.contact,
             vbd_swept: vbd.swept,
             vbd_limit: vbd.limit,

@@ -223,3 +223,25 @@ fn a_ratio_with_an_off_value_refuses_what_lies_between_and_says_what_is_allowed(
         assert_eq!(s.cloth.vbd_limit, good.parse::<f64>().unwrap());
     }
 }
+
+#[test]
+fn the_vbd_bending_keys_refuse_what_is_out_of_range_and_name_the_key() {
+    for (key, bad, allowed) in [
+        ("vbd_dihedral", "-1e-4", "0..=1"),
+        ("vbd_dihedral", "2", "0..=1"),
+        ("vbd_dihedral", "nan", "0..=1"),
+        ("vbd_flexion", "-5", "0..=1000000"),
+    ] {
+        let text = minimal("cloth", None, &format!("{key} = {bad}\n"));
+        let e = Scene::parse(&text, Path::new("m.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains(&format!("cloth.{key}")) && e.contains(allowed),
+            "{key} = {bad}: {e}"
+        );
+    }
+    let text = minimal("cloth", None, "vbd_dihedral = 1e-4\nvbd_flexion = 0\n");
+    let s = Scene::parse(&text, Path::new("m.toml")).unwrap();
+    assert_eq!((s.cloth.vbd_dihedral, s.cloth.vbd_flexion), (1e-4, 0.0));
+}
