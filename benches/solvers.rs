@@ -48,7 +48,7 @@ fn cloth_step(c: &mut Criterion) {
         .sample_size(10)
         .warm_up_time(Duration::from_secs(1))
         .measurement_time(Duration::from_secs(4));
-    let cases: [(&str, &str, &[&str], usize); 6] = [
+    let cases: [(&str, &str, &[&str], usize); 7] = [
         (
             "vbd_drape_64",
             "drape-sphere.toml",
@@ -83,9 +83,15 @@ fn cloth_step(c: &mut Criterion) {
         ),
         ("vbd_makehuman_walk", "makehuman-dress-walk.toml", &[], 30),
         (
-            "vbd_makehuman_walk_flexion",
+            "vbd_makehuman_walk_dihedral",
             "makehuman-dress-walk.toml",
-            &["cloth.vbd_dihedral=0", "cloth.vbd_flexion=5"],
+            &["cloth.vbd_dihedral=1e-4", "cloth.vbd_flexion=0"],
+            30,
+        ),
+        (
+            "vbd_makehuman_walk_pokes",
+            "makehuman-dress-walk.toml",
+            &["cloth.vbd_pokes=true"],
             30,
         ),
     ];

@@ -181,6 +181,37 @@ pub trait Collider: Send {
         let _ = (start, end, span, contacts);
         false
     }
+    /// Body vertices under cloth triangles. For each triangle listed in `which` (indices into
+    /// `triangles`, whose corners index `points`, the slice [`Collider::probe`] was given), the
+    /// body vertices whose projection along the triangle's normal falls inside it, with the
+    /// cloth's height over them along their outward normal, `s = n . (q - v)` (q the projection),
+    /// in [-`depth`, `reach`): features narrower than the cloth's triangles (a nipple, a
+    /// shoulder's tip, a knuckle) poke through between particles that are all outside, where
+    /// no test of the particles can see them. Written to `out` (cleared first) in the order of
+    /// `which`. The default knows no vertices and finds none.
+    fn pokes(
+        &mut self,
+        points: &[Vec3],
+        triangles: &[[u32; 3]],
+        which: &[u32],
+        (reach, depth): (Real, Real),
+        out: &mut Vec<Poke>,
+    ) {
+        let _ = (points, triangles, which, reach, depth);
+        out.clear();
+    }
+}
+
+/// A body vertex under a cloth triangle ([`Collider::pokes`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Poke {
+    /// The cloth triangle (index into the triangles the caller gave).
+    pub triangle: u32,
+    /// Barycentric coordinates of the triangle's point over the vertex.
+    pub bary: [Real; 3],
+    /// The body vertex and its outward unit normal.
+    pub point: Vec3,
+    pub normal: Vec3,
 }
 
 /// What a collider says about one point: signed distance to the body (negative inside) and the

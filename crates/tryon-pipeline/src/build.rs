@@ -331,6 +331,7 @@ pub fn solver(
                 dihedral: c.vbd_dihedral,
                 contact: c.vbd_contact,
                 swept: c.vbd_swept,
+                pokes: c.vbd_pokes,
                 limit: c.vbd_limit,
                 limit_passes: c.vbd_limit_passes,
                 ..VbdParams::default()

@@ -71,10 +71,11 @@ enum Crease {
 #[derive(Clone, Copy)]
 struct Highest(u32, Real);
 use tryon_core::mesh::PolyMesh;
-use tryon_core::stages::{Collider, Probe};
+use tryon_core::stages::{Collider, Poke, Probe};
 
 mod fan;
 mod opposite;
+mod pokes;
 
 /// P1's nearest-vertex tracking collider.
 #[derive(Clone, Debug)]
@@ -438,6 +439,17 @@ impl Collider for NearestVertexCollider {
         self.swept
             .sweep(&self.body, start, end, span, skin, contacts);
         true
+    }
+
+    fn pokes(
+        &mut self,
+        points: &[Vec3],
+        triangles: &[[u32; 3]],
+        which: &[u32],
+        limits: (Real, Real),
+        out: &mut Vec<Poke>,
+    ) {
+        self.find_pokes(points, triangles, which, limits, out);
     }
 
     fn signed_distance(&self, p: &Vec3) -> Option<Real> {

@@ -155,29 +155,41 @@ impl Hinges {
     /// Adds to each block's neighbours (for the colouring) the blocks of every vertex sharing a
     /// hinge with one of its members: a hinge's four vertices must not be stepped at once.
     pub fn add_neighbours(&self, blocks: &[[u32; 2]], neighbours: &mut [Vec<u32>]) {
-        if self.hinges.is_empty() {
-            return;
+        let stencils: Vec<[u32; 4]> = self.hinges.iter().map(|h| h.v).collect();
+        add_stencil_neighbours(&stencils, blocks, neighbours);
+    }
+}
+
+/// Adds to each block's neighbours the blocks of the other vertices of every stencil one of its
+/// members is in (a stencil's vertices must not be stepped at once; a repeated index is allowed).
+pub fn add_stencil_neighbours(
+    stencils: &[[u32; 4]],
+    blocks: &[[u32; 2]],
+    neighbours: &mut [Vec<u32>],
+) {
+    if stencils.is_empty() {
+        return;
+    }
+    let vertices = blocks.iter().flatten().filter(|&&v| v != ALONE).count();
+    let mut block_of = vec![0u32; vertices];
+    for (b, members) in blocks.iter().enumerate() {
+        for &v in members.iter().filter(|&&v| v != ALONE) {
+            block_of[v as usize] = b as u32;
         }
-        let mut block_of = vec![0u32; self.offsets.len() - 1];
-        for (b, members) in blocks.iter().enumerate() {
-            for &v in members.iter().filter(|&&v| v != ALONE) {
-                block_of[v as usize] = b as u32;
-            }
-        }
-        for hg in &self.hinges {
-            for &a in &hg.v {
-                for &b in &hg.v {
-                    let (ba, bb) = (block_of[a as usize], block_of[b as usize]);
-                    if ba != bb {
-                        neighbours[ba as usize].push(bb);
-                    }
+    }
+    for st in stencils {
+        for &a in st {
+            for &b in st {
+                let (ba, bb) = (block_of[a as usize], block_of[b as usize]);
+                if ba != bb {
+                    neighbours[ba as usize].push(bb);
                 }
             }
         }
-        for nb in neighbours.iter_mut() {
-            nb.sort_unstable();
-            nb.dedup();
-        }
+    }
+    for nb in neighbours.iter_mut() {
+        nb.sort_unstable();
+        nb.dedup();
     }
 }
 

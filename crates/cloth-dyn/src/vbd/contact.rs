@@ -46,6 +46,14 @@ impl VbdSim {
         self.probes = found;
     }
 
+    /// Particle `i`'s contact penalty (N/m). It must dominate the springs the vertex hangs from,
+    /// or stiff cloth is dragged through the body: never softer than their summed stiffness.
+    pub(super) fn penalty(&self, i: usize) -> Real {
+        self.vbd
+            .contact
+            .max(self.spring_sum[i] * CONTACT_OVER_SPRINGS)
+    }
+
     /// Adds to vertex `i`'s force and Hessian (at `xi`) the contact energy of plane `pl`: a
     /// quadratic penalty holding it a thickness outside, and IPC's lagged friction bounded by the
     /// penalty's force.
@@ -62,12 +70,7 @@ impl VbdSim {
         if gap >= 0.0 {
             return;
         }
-        // The penalty must dominate the springs the vertex hangs from, or stiff cloth is dragged
-        // through the body: never softer than their summed stiffness.
-        let kc = self
-            .vbd
-            .contact
-            .max(self.spring_sum[i] * CONTACT_OVER_SPRINGS);
+        let kc = self.penalty(i);
         *f -= pl.normal * (kc * gap);
         *hess += pl.normal * pl.normal.transpose() * kc;
         let mu = self.params.friction;

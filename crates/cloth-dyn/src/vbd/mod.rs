@@ -15,6 +15,7 @@ mod bending;
 pub mod colour;
 mod contact;
 mod pairs;
+mod pokes;
 
 /// Fewest vertices a thread takes at once in a colour's sweep: below this the hand-over costs more
 /// than the Newton steps it shares out.
@@ -65,6 +66,10 @@ pub struct VbdParams {
     pub limit: Real,
     /// Passes of that limit per step.
     pub limit_passes: u32,
+    /// Body vertices under cloth triangles held 1 mm behind the cloth (`pokes.rs`). Off by
+    /// default: it stops the skin showing through the coarse cloth, but with it the elegant
+    /// suit's collar caught under the chin in more runs (docs/decisions.md).
+    pub pokes: bool,
 }
 
 impl Default for VbdParams {
@@ -81,6 +86,7 @@ impl Default for VbdParams {
             swept: true,
             limit: 0.0,
             limit_passes: 8,
+            pokes: false,
         }
     }
 }
@@ -150,6 +156,9 @@ pub struct VbdSim {
     held: Vec<Option<Plane>>,
     /// The contact planes the strain limit keeps particles outside of.
     limit_planes: Vec<ContactPlane>,
+    /// Body vertices under cloth triangles, found at the first step of each frame.
+    pokes: pokes::Pokes,
+    pokes_stale: bool,
 }
 
 impl VbdSim {
@@ -198,6 +207,13 @@ impl VbdSim {
         let hinges = bending::Hinges::new(rest, &model.triangles, vbd.dihedral);
         let mut neighbours = pairs::neighbours(&offsets, &arms, &blocks);
         hinges.add_neighbours(&blocks, &mut neighbours);
+        // A poke's energy couples a triangle's corners.
+        let stencils: Vec<[u32; 4]> = model
+            .triangles
+            .iter()
+            .map(|t| [t[0], t[1], t[2], t[2]])
+            .collect();
+        bending::add_stencil_neighbours(&stencils, &blocks, &mut neighbours);
         let (order, colours) = colour::vertices(&neighbours);
         let spring_sum = lists.iter().map(|l| l.iter().map(|a| a.k).sum()).collect();
         let z = vec![Vec3::zeros(); n];
@@ -232,6 +248,8 @@ impl VbdSim {
             spring_sum,
             held: vec![None; n],
             limit_planes: Vec::new(),
+            pokes: pokes::Pokes::default(),
+            pokes_stale: true,
         }
     }
 
@@ -287,6 +305,13 @@ impl VbdSim {
         let prev = std::mem::take(&mut self.prev);
         self.pinches(&prev, collider);
         self.hinges.begin(&prev);
+        if self.vbd.pokes && self.pokes_stale {
+            let planes = &self.planes;
+            let tris = &self.model.triangles;
+            self.pokes
+                .find(collider, &prev, tris, |k| planes[k].map(|p| p.normal));
+            self.pokes_stale = false;
+        }
         self.prev = prev;
     }
 
@@ -323,6 +348,10 @@ impl VbdSim {
             o[5] += s * d.z * d.z;
         }
         self.hinges.add(i, &mut f, &mut o);
+        let kp = pokes::POKE_OVER_CONTACT * self.penalty(i);
+        let tris = &self.model.triangles;
+        self.pokes
+            .add(x, tris, i, (kp, pokes::POKE_GAP), &mut f, &mut o);
         let mut hess = Mat3::new(
             o[0] + iso,
             o[1],
@@ -525,6 +554,9 @@ impl ClothSolver for VbdSim {
         let bad_input = self.model.sanitize(frame);
         let (longest, max_speed) = (self.vbd.substep, self.params.max_speed);
         let mut backup = std::mem::take(&mut self.backup);
+        // The body moved before this call (the collider's update): its vertices under the cloth
+        // are found again at the first step.
+        self.pokes_stale = true;
         // The body is at its new shape for the whole frame (it moved at the collider's update).
         let step =
             |f: &mut CoarseFrame, t: Real, h: Real| self.step(f, (t, h), [1.0, 1.0], collider);

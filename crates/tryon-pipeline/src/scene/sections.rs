@@ -93,6 +93,11 @@ pub struct ClothSection {
     /// The `vbd` solver's swept (continuous) body collision: a particle whose path in a step
     /// crosses the body's surface inward is stopped on it, however thin the part.
     pub vbd_swept: bool,
+    /// The `vbd` solver holds body vertices found under cloth triangles 1 mm behind the
+    /// cloth, so narrow features (a nipple, a shoulder's tip) do not poke through between
+    /// particles. Off by default (docs/decisions.md: with it the elegant suit's collar caught under
+    /// the chin in more runs).
+    pub vbd_pokes: bool,
     /// The `vbd` solver's strain limit after its sweeps, 0 (off) or a ratio of rest length in
     /// [1, 2]: holds a free-hanging sheet's stretch (the drape); made garments on a body worse.
     pub vbd_limit: Real,
@@ -133,6 +138,7 @@ impl Default for ClothSection {
             vbd_dihedral: vbd.dihedral,
             vbd_contact: vbd.contact,
             vbd_swept: vbd.swept,
+            vbd_pokes: vbd.pokes,
             vbd_limit: vbd.limit,
             vbd_limit_passes: vbd.limit_passes,
         }
