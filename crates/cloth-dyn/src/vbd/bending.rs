@@ -143,12 +143,7 @@ impl Hinges {
             let hg = &self.hinges[h as usize];
             let g = self.start[h as usize].1[role as usize];
             *f -= g * (hg.k * self.now[h as usize]);
-            o[0] += hg.k * g.x * g.x;
-            o[1] += hg.k * g.x * g.y;
-            o[2] += hg.k * g.x * g.z;
-            o[3] += hg.k * g.y * g.y;
-            o[4] += hg.k * g.y * g.z;
-            o[5] += hg.k * g.z * g.z;
+            super::add_outer(o, hg.k, &g);
         }
     }
 

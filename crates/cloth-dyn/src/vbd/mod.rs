@@ -340,12 +340,7 @@ impl VbdSim {
             let t = (1.0 - a.rest / l).max(0.0);
             iso += a.k * t;
             let s = a.k * (1.0 - t) / l2;
-            o[0] += s * d.x * d.x;
-            o[1] += s * d.x * d.y;
-            o[2] += s * d.x * d.z;
-            o[3] += s * d.y * d.y;
-            o[4] += s * d.y * d.z;
-            o[5] += s * d.z * d.z;
+            add_outer(&mut o, s, &d);
         }
         self.hinges.add(i, &mut f, &mut o);
         let kp = pokes::POKE_OVER_CONTACT * self.penalty(i);
@@ -511,6 +506,18 @@ impl VbdSim {
         }
         bad
     }
+}
+
+/// Adds `k d d^T` to a symmetric 3 x 3 matrix kept as its upper triangle `o` (xx, xy, xz, yy,
+/// yz, zz).
+#[inline]
+fn add_outer(o: &mut [Real; 6], k: Real, d: &Vec3) {
+    o[0] += k * d.x * d.x;
+    o[1] += k * d.x * d.y;
+    o[2] += k * d.x * d.z;
+    o[3] += k * d.y * d.y;
+    o[4] += k * d.y * d.z;
+    o[5] += k * d.z * d.z;
 }
 
 /// `h^-1 f` for a symmetric positive definite 3 x 3 `h` (Cramer's rule on its upper triangle);

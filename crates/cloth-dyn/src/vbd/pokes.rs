@@ -128,14 +128,7 @@ impl Pokes {
             }
             let w = p.bary[role as usize];
             *f += p.normal * (k * w * gap);
-            let kw = k * w * w;
-            let m = p.normal;
-            o[0] += kw * m.x * m.x;
-            o[1] += kw * m.x * m.y;
-            o[2] += kw * m.x * m.z;
-            o[3] += kw * m.y * m.y;
-            o[4] += kw * m.y * m.z;
-            o[5] += kw * m.z * m.z;
+            super::add_outer(o, k * w * w, &p.normal);
         }
     }
 }
