@@ -43,8 +43,9 @@ pub struct VbdParams {
     /// 0 leaves them out.
     pub bend: Real,
     /// Bending rigidity (N m) of the hinges toward the rest dihedral angles (`bending.rs`); 0
-    /// (the default) leaves them out. The MakeHuman scenes use 1e-3 without flexion springs
-    /// (docs/decisions.md): a modelled garment keeps the side of its folds and curves.
+    /// (the default) leaves them out. A modelled garment then keeps the side of its folds and
+    /// curves; no scene uses it (with it the elegant suit's collar caught under the chin in more
+    /// runs, docs/decisions.md).
     pub dihedral: Real,
     /// Contact stiffness (N/m). It must dominate the springs a particle hangs from: at 1e4 the
     /// stretch springs (5e3 / 2 cm = 2.5e5 N/m on a MakeHuman garment) dragged sleeves into the
