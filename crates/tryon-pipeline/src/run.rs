@@ -77,6 +77,12 @@ pub struct Metrics {
     pub placement_moved: usize,
     /// Frames the referee judged (`[output] referee_every`); the figures above are over these.
     pub judged_frames: usize,
+    /// Most pairs of output garment triangles (sharing no vertex) that cross each other in one
+    /// frame (`crossings.rs`).
+    pub cloth_intersections: usize,
+    /// Smallest gap between layers of cloth over all frames: a vertex's distance to a triangle
+    /// not around it, along that triangle's normal (m; 0.01 when no layers came nearer).
+    pub cloth_min_gap_m: Real,
 }
 
 /// Per-frame figures (for plots and regressions).
@@ -88,6 +94,8 @@ pub struct FrameStats {
     pub max_stretch: Real,
     /// Share of garment vertices more than 10 cm farther from the body than where they started.
     pub detached_share: Real,
+    /// Crossing pairs of garment triangles.
+    pub cloth_intersections: usize,
     pub contacts: u32,
     pub retries: u32,
     /// Sub-frames the body moved in.
@@ -288,13 +296,14 @@ impl Pipeline {
                     length_frames += 1;
                 }
                 let referee = &mut self.referee;
-                let (pen, (smin, smax, smean)) = timers.time("referee", || {
+                let (pen, (smin, smax, smean), cloth) = timers.time("referee", || {
                     if moving {
                         tryon_core::stages::Collider::update(referee, &body_frame);
                     }
                     (
                         penetration(referee, output, &start_distances),
                         stretch(&info.edges, &info.rest, &coarse_x),
+                        crate::crossings::judge(output, &garment_triangles),
                     )
                 });
                 let m = &mut stats.metrics;
@@ -307,6 +316,12 @@ impl Pipeline {
                     m.min_stretch.min(smin)
                 };
                 m.detached_share = m.detached_share.max(pen.detached_share);
+                m.cloth_intersections = m.cloth_intersections.max(cloth.crossings);
+                m.cloth_min_gap_m = if m.judged_frames == 1 {
+                    cloth.min_gap
+                } else {
+                    m.cloth_min_gap_m.min(cloth.min_gap)
+                };
                 stretch_sum += smean;
                 share_sum += pen.share_over_1mm;
                 stats.per_frame.push(FrameStats {
@@ -315,6 +330,7 @@ impl Pipeline {
                     p99_penetration_m: pen.p99,
                     max_stretch: smax,
                     detached_share: pen.detached_share,
+                    cloth_intersections: cloth.crossings,
                     contacts: report.contacts,
                     retries: report.retries,
                     body_parts: report.body_parts,

@@ -1,0 +1,300 @@
+//! The cloth-cloth referee: how many of the output garment's triangle pairs cross each other, and
+//! how close its layers come. It is measurement, independent of the solver's own proximity code:
+//! a uniform grid of the triangles' boxes finds the candidates, a plane-side test rejects pairs
+//! that cannot touch, and parry's GJK decides the rest (`query::intersection_test`); gaps are
+//! parry's point-triangle projections.
+
+use parry3d_f64::math::{Isometry, Point};
+use parry3d_f64::query::{PointQuery, intersection_test};
+use parry3d_f64::shape::Triangle;
+use rayon::prelude::*;
+use tryon_core::math::{Real, Vec3};
+
+/// Farthest layer gap the referee looks for (m); a garment with no closer layers reads this.
+pub const GAP_REACH: Real = 0.01;
+
+/// A layer gap is measured along the face's normal: the vertex's offset from its projection
+/// makes at least this cosine with the face normal (in-plane neighbours are not layers).
+const ALONG_NORMAL: Real = 0.9;
+
+/// Fewest triangles a thread takes at once.
+const CHUNK: usize = 64;
+
+/// What the referee found in one frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ClothContact {
+    /// Pairs of triangles that share no vertex and intersect.
+    pub crossings: usize,
+    /// Smallest distance from a vertex to a triangle not around it, where the offset to the
+    /// triangle's nearest point runs along the triangle's normal (so a neighbour in the cloth's
+    /// own plane is not a layer) (m); `GAP_REACH` when none is nearer.
+    pub min_gap: Real,
+}
+
+/// A uniform grid over boxes: each box is listed in every cell it overlaps.
+struct Grid {
+    cell: Real,
+    /// (cell key, item), sorted.
+    entries: Vec<(u64, u32)>,
+}
+
+fn key(c: [i64; 3]) -> u64 {
+    // Wrapping mix of the three cell coordinates; distinct cells may share a key (the exact
+    // tests that follow sort them out).
+    (c[0] as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+        ^ (c[1] as u64).wrapping_mul(0xC2B2_AE3D_27D4_EB4F)
+        ^ (c[2] as u64).wrapping_mul(0x1656_67B1_9E37_79F9)
+}
+
+impl Grid {
+    /// The keys of the cells a box overlaps.
+    fn cells(&self, lo: &Vec3, hi: &Vec3, out: &mut Vec<u64>) {
+        let f = |v: Real| (v / self.cell).floor() as i64;
+        let (a, b) = ([f(lo.x), f(lo.y), f(lo.z)], [f(hi.x), f(hi.y), f(hi.z)]);
+        out.clear();
+        for x in a[0]..=b[0] {
+            for y in a[1]..=b[1] {
+                out.extend((a[2]..=b[2]).map(|z| key([x, y, z])));
+            }
+        }
+    }
+
+    fn new(boxes: &[(Vec3, Vec3)], cell: Real) -> Self {
+        let mut g = Grid {
+            cell,
+            entries: Vec::new(),
+        };
+        let mut keys = Vec::new();
+        for (i, (lo, hi)) in boxes.iter().enumerate() {
+            g.cells(lo, hi, &mut keys);
+            g.entries.extend(keys.iter().map(|&k| (k, i as u32)));
+        }
+        g.entries.sort_unstable();
+        g
+    }
+
+    /// Items whose cells meet the box, sorted, each once.
+    fn query(&self, lo: &Vec3, hi: &Vec3, out: &mut Vec<u32>) {
+        let mut keys = Vec::new();
+        self.cells(lo, hi, &mut keys);
+        out.clear();
+        for k in keys {
+            let start = self.entries.partition_point(|e| e.0 < k);
+            out.extend(
+                self.entries[start..]
+                    .iter()
+                    .take_while(|e| e.0 == k)
+                    .map(|e| e.1),
+            );
+        }
+        out.sort_unstable();
+        out.dedup();
+    }
+}
+
+fn bounds(x: &[Vec3], t: &[u32; 3], pad: Real) -> (Vec3, Vec3) {
+    let (a, b, c) = (x[t[0] as usize], x[t[1] as usize], x[t[2] as usize]);
+    let p = Vec3::repeat(pad);
+    (a.inf(&b).inf(&c) - p, a.sup(&b).sup(&c) + p)
+}
+
+fn triangle(x: &[Vec3], t: &[u32; 3]) -> Triangle {
+    let p = |i: u32| Point::from(x[i as usize]);
+    Triangle::new(p(t[0]), p(t[1]), p(t[2]))
+}
+
+fn shares_vertex(a: &[u32; 3], b: &[u32; 3]) -> bool {
+    a.iter().any(|v| b.contains(v))
+}
+
+/// Whether all three corners of `b` lie strictly on one side of `a`'s plane.
+fn one_side(x: &[Vec3], a: &[u32; 3], b: &[u32; 3]) -> bool {
+    let (p, q, r) = (x[a[0] as usize], x[a[1] as usize], x[a[2] as usize]);
+    let n = (q - p).cross(&(r - p));
+    let s = b.map(|v| n.dot(&(x[v as usize] - p)));
+    s.iter().all(|d| *d > 0.0) || s.iter().all(|d| *d < 0.0)
+}
+
+/// Whether triangles `a` and `b` (sharing no vertex) intersect.
+fn crossing(x: &[Vec3], a: &[u32; 3], b: &[u32; 3]) -> bool {
+    if one_side(x, a, b) || one_side(x, b, a) {
+        return false;
+    }
+    let id = Isometry::identity();
+    intersection_test(&id, &triangle(x, a), &id, &triangle(x, b)).unwrap_or(false)
+}
+
+/// Judges one frame of a garment: positions `x`, triangles `tris` (indices checked by the caller).
+pub fn judge(x: &[Vec3], tris: &[[u32; 3]]) -> ClothContact {
+    match index(x, tris) {
+        Some((boxes, grid)) => ClothContact {
+            crossings: crossing_pairs(x, tris, &boxes, &grid).len(),
+            min_gap: min_gap(x, tris, &grid),
+        },
+        None => ClothContact {
+            crossings: 0,
+            min_gap: if tris.is_empty() { GAP_REACH } else { 0.0 },
+        },
+    }
+}
+
+/// The crossing pairs of triangles (indices into `tris`, the lower first, in order): where a
+/// garment passes through itself.
+pub fn crossings(x: &[Vec3], tris: &[[u32; 3]]) -> Vec<[u32; 2]> {
+    index(x, tris).map_or_else(Vec::new, |(boxes, grid)| {
+        crossing_pairs(x, tris, &boxes, &grid)
+    })
+}
+
+/// The triangles' boxes and their grid (`None` for no triangles or non-finite positions).
+fn index(x: &[Vec3], tris: &[[u32; 3]]) -> Option<(Vec<(Vec3, Vec3)>, Grid)> {
+    if tris.is_empty() {
+        return None;
+    }
+    let boxes: Vec<(Vec3, Vec3)> = tris.iter().map(|t| bounds(x, t, 0.0)).collect();
+    let mean_edge = tris
+        .iter()
+        .map(|t| (x[t[0] as usize] - x[t[1] as usize]).norm())
+        .sum::<Real>()
+        / tris.len() as Real;
+    let cell = (2.0 * mean_edge).max(GAP_REACH);
+    cell.is_finite().then(|| {
+        let grid = Grid::new(&boxes, cell);
+        (boxes, grid)
+    })
+}
+
+fn crossing_pairs(
+    x: &[Vec3],
+    tris: &[[u32; 3]],
+    boxes: &[(Vec3, Vec3)],
+    grid: &Grid,
+) -> Vec<[u32; 2]> {
+    (0..tris.len())
+        .into_par_iter()
+        .with_min_len(CHUNK)
+        .map_init(Vec::new, |found, i| {
+            let (lo, hi) = &boxes[i];
+            grid.query(lo, hi, found);
+            found
+                .iter()
+                .filter(|&&j| (j as usize) > i)
+                .filter(|&&j| {
+                    let (a, b) = (&tris[i], &tris[j as usize]);
+                    let (blo, bhi) = &boxes[j as usize];
+                    let apart = (0..3).any(|k| lo[k] > bhi[k] || blo[k] > hi[k]);
+                    !apart && !shares_vertex(a, b) && crossing(x, a, b)
+                })
+                .map(|&j| [i as u32, j])
+                .collect::<Vec<_>>()
+        })
+        .flatten_iter()
+        .collect()
+}
+
+/// The smallest vertex-face gap along the face's normal (see [`ClothContact::min_gap`]).
+fn min_gap(x: &[Vec3], tris: &[[u32; 3]], grid: &Grid) -> Real {
+    let pad = Vec3::repeat(GAP_REACH);
+    (0..x.len())
+        .into_par_iter()
+        .with_min_len(CHUNK)
+        .map_init(Vec::new, |found, v| {
+            let p = x[v];
+            grid.query(&(p - pad), &(p + pad), found);
+            let mut best = GAP_REACH;
+            for &j in found.iter() {
+                let t = &tris[j as usize];
+                if t.contains(&(v as u32)) {
+                    continue;
+                }
+                let tri = triangle(x, t);
+                let proj = tri.project_local_point(&Point::from(p), false);
+                let off = p - proj.point.coords;
+                let d = off.norm();
+                let n = tri.normal().map(|n| n.into_inner());
+                let along = n.is_some_and(|n| n.dot(&off).abs() >= ALONG_NORMAL * d);
+                if d < best && along {
+                    best = d;
+                }
+            }
+            best
+        })
+        .reduce(|| GAP_REACH, Real::min)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A flat square sheet of n x n cells of side `s` at height `z`, indices offset by `base`.
+    fn sheet(n: u32, s: Real, z: Real, base: u32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+        let mut x = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                x.push(Vec3::new(i as Real * s, j as Real * s, z));
+            }
+        }
+        let mut t = Vec::new();
+        let id = |i: u32, j: u32| base + j * (n + 1) + i;
+        for j in 0..n {
+            for i in 0..n {
+                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        (x, t)
+    }
+
+    #[test]
+    fn two_parallel_sheets_do_not_cross_and_their_gap_is_their_distance() {
+        let (mut x, mut t) = sheet(6, 0.02, 0.0, 0);
+        let (x2, t2) = sheet(6, 0.02, 0.003, x.len() as u32);
+        x.extend(x2);
+        t.extend(t2);
+        let j = judge(&x, &t);
+        assert_eq!(j.crossings, 0);
+        assert!((j.min_gap - 0.003).abs() < 1e-9, "{j:?}");
+        // One sheet alone: its own neighbours are in its plane, so no gap is found.
+        let (x1, t1) = sheet(6, 0.02, 0.0, 0);
+        assert_eq!(judge(&x1, &t1).min_gap, GAP_REACH);
+    }
+
+    #[test]
+    fn a_vertex_pushed_through_the_other_sheet_makes_its_triangles_cross() {
+        let (mut x, mut t) = sheet(4, 0.02, 0.0, 0);
+        let n = x.len() as u32;
+        let (x2, t2) = sheet(4, 0.02, 0.003, n);
+        x.extend(x2);
+        t.extend(t2);
+        // Vertex (2, 2) of the upper sheet goes 2 mm below the lower one: its six triangles
+        // each pass through the lower sheet.
+        let v = (n + 2 * 5 + 2) as usize;
+        x[v].z = -0.002;
+        let j = judge(&x, &t);
+        // Each of the six triangles around it crosses the two lower triangles under the vertex
+        // or the ones it passes through; at least six pairs cross, and every one shares the
+        // moved vertex (counted by brute force below).
+        let brute = (0..t.len())
+            .flat_map(|a| (a + 1..t.len()).map(move |b| (a, b)))
+            .filter(|&(a, b)| !shares_vertex(&t[a], &t[b]))
+            .filter(|&(a, b)| {
+                let id = Isometry::identity();
+                intersection_test(&id, &triangle(&x, &t[a]), &id, &triangle(&x, &t[b])).unwrap()
+            })
+            .count();
+        assert!(j.crossings >= 6, "{j:?}");
+        assert_eq!(j.crossings, brute);
+    }
+
+    #[test]
+    fn degenerate_and_empty_input_give_no_crossings() {
+        assert_eq!(judge(&[], &[]).crossings, 0);
+        // Triangles collapsed to points, apart from each other.
+        let mut x = vec![Vec3::zeros(); 6];
+        x[3..].fill(Vec3::repeat(1.0));
+        assert_eq!(judge(&x, &[[0, 1, 2], [3, 4, 5]]).crossings, 0);
+        // A non-finite vertex gives no figures rather than a panic.
+        x[0].x = Real::NAN;
+        assert_eq!(judge(&x, &[[0, 1, 2], [3, 4, 5]]).crossings, 0);
+    }
+}
