@@ -1,6 +1,7 @@
 //! Criterion benchmarks of the garment solvers' cloth step alone (`ClothSolver::step_frame`), on one
-//! thread and on two: VBD on the drape at N = 64 and 128 (plain, and with its strain limit at rest
-//! length), and on the MakeHuman walk (skipped when
+//! thread and on two: VBD on the drape at N = 64 and 128 (plain, with its strain limit at rest
+//! length, and with the cloth's contact with itself), and on the MakeHuman walk (plain, with
+//! hinges, pokes, or self-contact; skipped when
 //! the shared assets are absent). Each scene is run untimed to a frame in contact (the drape after
 //! 1 s, the walk at frame 30); every timed iteration then steps that same frame from the same cloth
 //! state against the same body, so one and two threads do the same work. The VBD sweep gives the
@@ -48,7 +49,7 @@ fn cloth_step(c: &mut Criterion) {
         .sample_size(10)
         .warm_up_time(Duration::from_secs(1))
         .measurement_time(Duration::from_secs(4));
-    let cases: [(&str, &str, &[&str], usize); 7] = [
+    let cases: [(&str, &str, &[&str], usize); 10] = [
         (
             "vbd_drape_64",
             "drape-sphere.toml",
@@ -92,6 +93,32 @@ fn cloth_step(c: &mut Criterion) {
             "vbd_makehuman_walk_pokes",
             "makehuman-dress-walk.toml",
             &["cloth.vbd_pokes=true"],
+            30,
+        ),
+        (
+            "vbd_self_drape_64",
+            "drape-sphere.toml",
+            &[
+                "cloth.solver=\"vbd\"",
+                "garment.particles=64",
+                "effects.self_collision=true",
+            ],
+            60,
+        ),
+        (
+            "vbd_self_drape_128",
+            "drape-sphere.toml",
+            &[
+                "cloth.solver=\"vbd\"",
+                "garment.particles=128",
+                "effects.self_collision=true",
+            ],
+            60,
+        ),
+        (
+            "vbd_self_makehuman_walk",
+            "makehuman-dress-walk.toml",
+            &["effects.self_collision=true"],
             30,
         ),
     ];

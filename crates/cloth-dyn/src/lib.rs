@@ -16,6 +16,7 @@ pub mod model;
 pub mod params;
 pub mod presets;
 pub mod retry;
+pub mod self_contact;
 pub mod solver;
 pub mod strain;
 pub mod vbd;

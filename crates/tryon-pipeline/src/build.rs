@@ -10,6 +10,7 @@ use body_collide::{
     BodyError, DepthMapCollider, ExactCollider, NearestVertexCollider, SdfCollider,
 };
 use body_model::{Mannequin, SkinnedBody};
+use cloth_dyn::self_contact::SelfParams;
 use cloth_dyn::{
     BuildClothError, ClothModel, ClothParams, ClothSim, Handle, IntegratorKind, VbdParams, VbdSim,
     XpbdParams, XpbdSim, presets,
@@ -334,6 +335,11 @@ pub fn solver(
                 pokes: c.vbd_pokes,
                 limit: c.vbd_limit,
                 limit_passes: c.vbd_limit_passes,
+                self_contact: scene.effects.self_collision.then(|| SelfParams {
+                    thickness: c.self_thickness,
+                    friction: scene.effects.friction,
+                    ..SelfParams::default()
+                }),
                 ..VbdParams::default()
             };
             Box::new(VbdSim::new(model, p, v, c.thickness))

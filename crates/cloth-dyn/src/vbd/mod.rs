@@ -14,6 +14,8 @@
 mod bending;
 pub mod colour;
 mod contact;
+mod layers;
+mod linalg;
 mod pairs;
 mod pokes;
 
@@ -24,7 +26,9 @@ const PAR_CHUNK: usize = 32;
 use crate::model::{ClothModel, Handle};
 use crate::params::ClothParams;
 use crate::retry::frame_with_retries;
+use crate::self_contact::{SelfContacts, SelfParams};
 use crate::strain::{ContactPlane, Tethers, limit_strain};
+use linalg::{add_outer, solve_spd3};
 use rayon::prelude::*;
 use tryon_core::frames::{CoarseFrame, Contact, StepReport};
 use tryon_core::math::{Mat3, Real, Vec3, is_finite};
@@ -71,6 +75,8 @@ pub struct VbdParams {
     /// default: it stops the skin showing through the coarse cloth, but with it the elegant
     /// suit's collar caught under the chin in more runs (docs/decisions.md).
     pub pokes: bool,
+    /// The cloth's contact with itself (`crate::self_contact`); `None` leaves it out.
+    pub self_contact: Option<SelfParams>,
 }
 
 impl Default for VbdParams {
@@ -88,6 +94,7 @@ impl Default for VbdParams {
             limit: 0.0,
             limit_passes: 8,
             pokes: false,
+            self_contact: None,
         }
     }
 }
@@ -160,6 +167,8 @@ pub struct VbdSim {
     /// Body vertices under cloth triangles, found at the first step of each frame.
     pokes: pokes::Pokes,
     pokes_stale: bool,
+    /// The cloth's contacts with itself (`vbd.self_contact`).
+    layers: Option<SelfContacts>,
 }
 
 impl VbdSim {
@@ -217,6 +226,9 @@ impl VbdSim {
         bending::add_stencil_neighbours(&stencils, &blocks, &mut neighbours);
         let (order, colours) = colour::vertices(&neighbours);
         let spring_sum = lists.iter().map(|l| l.iter().map(|a| a.k).sum()).collect();
+        let layers = vbd
+            .self_contact
+            .map(|p| SelfContacts::new(&model.triangles, rest, p));
         let z = vec![Vec3::zeros(); n];
         VbdSim {
             model,
@@ -251,6 +263,7 @@ impl VbdSim {
             limit_planes: Vec::new(),
             pokes: pokes::Pokes::default(),
             pokes_stale: true,
+            layers,
         }
     }
 
@@ -365,6 +378,10 @@ impl VbdSim {
         {
             self.contact(&pl, i, xi, h, &mut f, &mut hess);
         }
+        if let Some(sc) = &self.layers {
+            let kc = (self.penalty(i), self.vbd.stick_speed * h);
+            sc.add(i, x, kc, &mut f, &mut hess);
+        }
         (f, hess)
     }
 
@@ -447,6 +464,7 @@ impl VbdSim {
             }
             if tethers {
                 self.tethers.project(1.0, x);
+                self.layers_clamp(x);
                 if !self.hinges.is_empty() {
                     self.hinges.refresh(x, &self.prev);
                 }
@@ -461,8 +479,12 @@ impl VbdSim {
         for (d, &b) in dx.iter().zip(&self.order[r]) {
             for (dv, &v) in d.iter().zip(&self.blocks[b as usize]) {
                 if v != pairs::ALONE && is_finite(dv) {
-                    x[v as usize] += dv;
-                    self.hinges.moved(v as usize, dv);
+                    let (v, old) = (v as usize, x[v as usize]);
+                    x[v] += dv;
+                    if let Some(sc) = &self.layers {
+                        sc.clamp(v, &mut x[v]);
+                    }
+                    self.hinges.moved(v, &(x[v] - old));
                 }
             }
         }
@@ -492,8 +514,10 @@ impl VbdSim {
     ) -> u32 {
         self.begin(frame, t0 + h, h, collider);
         let mut x = std::mem::take(&mut frame.positions);
+        self.layers_begin(&mut x);
         self.solve(&mut x, h);
         self.limit(&mut x);
+        self.layers_clamp(&mut x);
         self.fail_safe(&mut x, span, collider);
         frame.positions = x;
         let max2 = self.params.max_speed * self.params.max_speed;
@@ -507,40 +531,6 @@ impl VbdSim {
         }
         bad
     }
-}
-
-/// Adds `k d d^T` to a symmetric 3 x 3 matrix kept as its upper triangle `o` (xx, xy, xz, yy,
-/// yz, zz).
-#[inline]
-fn add_outer(o: &mut [Real; 6], k: Real, d: &Vec3) {
-    o[0] += k * d.x * d.x;
-    o[1] += k * d.x * d.y;
-    o[2] += k * d.x * d.z;
-    o[3] += k * d.y * d.y;
-    o[4] += k * d.y * d.z;
-    o[5] += k * d.z * d.z;
-}
-
-/// `h^-1 f` for a symmetric positive definite 3 x 3 `h` (Cramer's rule on its upper triangle);
-/// zero where `h` is not positive definite (Sylvester's criterion) or the result is not finite.
-/// It replaced nalgebra's general Cholesky, which runs once per vertex per sweep: the drape's
-/// cloth step fell by 8% (`cargo bench --bench solvers`).
-fn solve_spd3(h: &Mat3, f: &Vec3) -> Vec3 {
-    let (a, b, c) = (h[(0, 0)], h[(0, 1)], h[(0, 2)]);
-    let (d, e, g) = (h[(1, 1)], h[(1, 2)], h[(2, 2)]);
-    // Cofactors of the symmetric matrix [a b c; b d e; c e g].
-    let (ca, cb, cc) = (d * g - e * e, c * e - b * g, b * e - c * d);
-    let (cd, ce, cg) = (a * g - c * c, b * c - a * e, a * d - b * b);
-    let det = a * ca + b * cb + c * cc;
-    if !(a > 0.0 && cg > 0.0 && det > 0.0) {
-        return Vec3::zeros();
-    }
-    let x = Vec3::new(
-        ca * f.x + cb * f.y + cc * f.z,
-        cb * f.x + cd * f.y + ce * f.z,
-        cc * f.x + ce * f.y + cg * f.z,
-    ) / det;
-    if is_finite(&x) { x } else { Vec3::zeros() }
 }
 
 impl ClothSolver for VbdSim {

@@ -220,6 +220,17 @@ impl Scene {
                 expected,
             ));
         }
+        if self.effects.self_collision && self.cloth.solver != SolverName::Vbd {
+            let expected = "false, or cloth.solver = \"vbd\" (only the vbd solver has the cloth's contact with itself)";
+            return Err(bad(
+                text,
+                file,
+                "effects",
+                "self_collision",
+                "true".into(),
+                expected,
+            ));
+        }
         match body.as_str() {
             "object" | "sphere" if motion != "still" => wrong(
                 "motion",

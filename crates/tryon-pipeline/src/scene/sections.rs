@@ -104,6 +104,9 @@ pub struct ClothSection {
     /// Passes of the `vbd` solver's strain limit per step.
     #[schemars(range(min = 1, max = 100))]
     pub vbd_limit_passes: u32,
+    /// Distance the cloth keeps from itself with `effects.self_collision` (m).
+    #[schemars(range(min = 1e-4, max = 0.02))]
+    pub self_thickness: Real,
 }
 
 impl Default for ClothSection {
@@ -141,6 +144,7 @@ impl Default for ClothSection {
             vbd_pokes: vbd.pokes,
             vbd_limit: vbd.limit,
             vbd_limit_passes: vbd.limit_passes,
+            self_thickness: cloth_dyn::self_contact::SelfParams::default().thickness,
         }
     }
 }
@@ -223,6 +227,10 @@ pub struct EffectsSection {
     /// thighs together), leaving two cloth thicknesses between them, as flesh gives way; off,
     /// the parts pass into each other as linear blend skinning puts them.
     pub body_press: bool,
+    /// The cloth's contact with itself (the `vbd` solver): layers and folds keep
+    /// `cloth.self_thickness` apart and never pass through each other where they were apart in
+    /// the modelled shape; friction between layers is `friction`.
+    pub self_collision: bool,
     /// Velocity damping (1/s); 0 turns it off.
     #[schemars(range(min = 0.0, max = 100.0))]
     pub velocity_damping: Real,
@@ -270,6 +278,7 @@ impl Default for EffectsSection {
             depth_resolution: body_collide::DepthMapCollider::DEFAULT_RESOLUTION,
             follow_body: true,
             body_press: true,
+            self_collision: false,
             velocity_damping: env.velocity_damping,
             refine: 0,
             // The surface stages a refined scene gets unless it says otherwise: fine collision

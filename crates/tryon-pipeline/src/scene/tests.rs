@@ -245,3 +245,29 @@ fn the_vbd_bending_keys_refuse_what_is_out_of_range_and_name_the_key() {
     let s = Scene::parse(&text, Path::new("m.toml")).unwrap();
     assert_eq!((s.cloth.vbd_dihedral, s.cloth.vbd_flexion), (1e-4, 0.0));
 }
+
+#[test]
+fn self_collision_asks_for_the_vbd_solver_and_a_thickness_in_range() {
+    let text = minimal("effects", None, "self_collision = true\n");
+    let e = Scene::parse(&text, Path::new("m.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("effects.self_collision") && e.contains("vbd"),
+        "{e}"
+    );
+    let text = text.replace(
+        "[cloth]\n",
+        "[cloth]\nsolver = \"vbd\"\nself_thickness = 0.05\n",
+    );
+    let e = Scene::parse(&text, Path::new("m.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("cloth.self_thickness") && e.contains("0.02"),
+        "{e}"
+    );
+    let ok = text.replace("0.05", "0.003");
+    let s = Scene::parse(&ok, Path::new("m.toml")).unwrap();
+    assert!(s.effects.self_collision && s.cloth.self_thickness == 0.003);
+}
