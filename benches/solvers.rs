@@ -49,7 +49,7 @@ fn cloth_step(c: &mut Criterion) {
         .sample_size(10)
         .warm_up_time(Duration::from_secs(1))
         .measurement_time(Duration::from_secs(4));
-    let cases: [(&str, &str, &[&str], usize); 10] = [
+    let cases: [(&str, &str, &[&str], usize); 12] = [
         (
             "vbd_drape_64",
             "drape-sphere.toml",
@@ -112,6 +112,28 @@ fn cloth_step(c: &mut Criterion) {
                 "cloth.solver=\"vbd\"",
                 "garment.particles=128",
                 "effects.self_collision=true",
+            ],
+            60,
+        ),
+        (
+            "vbd_self_hash_drape_64",
+            "drape-sphere.toml",
+            &[
+                "cloth.solver=\"vbd\"",
+                "garment.particles=64",
+                "effects.self_collision=true",
+                "cloth.self_broad_phase=\"hash\"",
+            ],
+            60,
+        ),
+        (
+            "vbd_self_hash_drape_128",
+            "drape-sphere.toml",
+            &[
+                "cloth.solver=\"vbd\"",
+                "garment.particles=128",
+                "effects.self_collision=true",
+                "cloth.self_broad_phase=\"hash\"",
             ],
             60,
         ),

@@ -2,6 +2,7 @@
 //! solver, the colliders, the bands and the surface stages. `assemble.rs` calls them in order.
 
 use crate::real;
+use crate::scene::BroadPhaseName;
 use crate::scene::{
     BodySection, CollisionMethod, EffectsSection, GarmentSection, IntegratorName, MannequinBody,
     MaterialName, MotionSection, ObjectBody, Scene, SolverName,
@@ -11,6 +12,7 @@ use body_collide::{
 };
 use body_model::{Mannequin, SkinnedBody};
 use cloth_dyn::self_contact::SelfParams;
+use cloth_dyn::self_contact::broad::BroadPhase;
 use cloth_dyn::{
     BuildClothError, ClothModel, ClothParams, ClothSim, Handle, IntegratorKind, VbdParams, VbdSim,
     XpbdParams, XpbdSim, presets,
@@ -338,6 +340,10 @@ pub fn solver(
                 self_contact: scene.effects.self_collision.then(|| SelfParams {
                     thickness: c.self_thickness,
                     friction: scene.effects.friction,
+                    broad: match c.self_broad_phase {
+                        BroadPhaseName::Tree => BroadPhase::Tree,
+                        BroadPhaseName::Hash => BroadPhase::Hash,
+                    },
                     ..SelfParams::default()
                 }),
                 ..VbdParams::default()

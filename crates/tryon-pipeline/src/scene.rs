@@ -17,7 +17,9 @@ pub use schema::{
     MannequinBody, MaterialName, MhcloSpec, MotionSection, ObjectBody, RigName, SceneSection,
     SkirtSpec, SphereBody, SquareSpec, StillSpec, WalkSpec,
 };
-pub use sections::{ClothSection, CollisionMethod, EffectsSection, OutputSection, SolverName};
+pub use sections::{
+    BroadPhaseName, ClothSection, CollisionMethod, EffectsSection, OutputSection, SolverName,
+};
 
 /// Why a scene file was rejected.
 #[derive(Debug, Error)]

@@ -14,9 +14,9 @@ impl SelfContacts {
         let Some(r) = self.by_vertex_start.get(i..i + 2) else {
             return;
         };
-        let th = self.params.thickness;
         for &(s, slot) in &self.by_vertex[r[0] as usize..r[1] as usize] {
             let st = &self.stencils[s as usize];
+            let th = st.thickness;
             if st.lambda == 0.0 {
                 // Each primitive's points moved no farther than its farthest vertex: while the
                 // pair cannot have come within the thickness, it adds nothing.

@@ -12,22 +12,33 @@
 //! Left out of both the pairs and the bounds: primitives sharing a vertex, primitives within one
 //! ring of each other in the mesh unless they face each other (`FACING`: neighbours in the
 //! cloth's own plane are held by its springs, a sharp fold brings one face on), and pairs nearer
-//! than the thickness in the rest shape (layers modelled touching, or crossing, as some MakeHuman garments
-//! are: they were never apart).
+//! than a tenth of the thickness in the starting shape (layers modelled touching, or crossing, as
+//! some MakeHuman garments are: they were never apart). A pair nearer than the thickness there
+//! keeps 0.9 of its distance there instead of the thickness.
 
+pub mod broad;
 mod energy;
 pub mod geom;
 pub mod grid;
+mod untangle;
 
+use broad::{Broad, BroadPhase, Scratch};
 use rayon::prelude::*;
 use std::collections::HashSet;
 use tryon_core::math::{Real, Vec3};
+pub use untangle::Untangled;
 
 /// Primitives within one ring of each other in the mesh pair up only where they face each
 /// other: the offset between them makes at least this cosine with the triangle's normal (or the
 /// two edges' common normal). Neighbours in the cloth's own plane are held by its springs; a
 /// sharp fold brings a neighbour's neighbour face on.
 const FACING: Real = 0.5;
+
+/// Pairs nearer than this share of the thickness in the starting shape touch there: left out.
+const TOUCHING: Real = 0.1;
+
+/// A pair nearer than the thickness in the starting shape keeps this share of its distance there.
+const REST_SHARE: Real = 0.9;
 
 /// Fewest queries a thread takes at once.
 const CHUNK: usize = 64;
@@ -44,6 +55,8 @@ pub struct SelfParams {
     pub reach: Real,
     /// Coulomb friction between layers.
     pub friction: Real,
+    /// How candidate pairs are found.
+    pub broad: BroadPhase,
 }
 
 impl Default for SelfParams {
@@ -53,6 +66,7 @@ impl Default for SelfParams {
             share: 0.3,
             reach: 0.005,
             friction: 0.3,
+            broad: BroadPhase::default(),
         }
     }
 }
@@ -73,6 +87,9 @@ pub struct Stencil {
     pub lambda: Real,
     /// The primitives' distance at detection (m).
     pub gap: Real,
+    /// The distance this pair keeps: the thickness, or less where the pair was nearer in the
+    /// starting shape (a layer modelled 1 mm over another is held at 0.9 mm, not pushed off).
+    pub thickness: Real,
 }
 
 /// A pair found by a query: its stencil and distance at detection.
@@ -89,10 +106,12 @@ pub struct SelfContacts {
     /// Per vertex, itself and its neighbours, sorted (CSR).
     ring_start: Vec<u32>,
     ring: Vec<u32>,
-    /// Vertex-triangle (`v << 32 | t`) and edge-edge (`1 << 63 | e << 32 | f`) pairs nearer than
-    /// the thickness in the rest shape.
+    /// Vertex-triangle (`v << 32 | t`) and edge-edge (`1 << 63 | e << 32 | f`) pairs touching
+    /// in the starting shape.
     rest_near: HashSet<u64>,
-    grid: grid::Grid,
+    /// The starting shape.
+    rest: Vec<Vec3>,
+    broad: Broad,
     boxes: Vec<(Vec3, Vec3)>,
     /// The pairs near enough to touch in this step.
     pub stencils: Vec<Stencil>,
@@ -117,15 +136,6 @@ impl Stencil {
             [1.0, -w[0], -w[1], -w[2]]
         }
     }
-}
-
-/// A thread's scratch space for queries.
-#[derive(Default)]
-struct Scratch {
-    found: Vec<u32>,
-    others: Vec<u32>,
-    tris: grid::Stamps,
-    edges: grid::Stamps,
 }
 
 fn ring_of<'a>(start: &[u32], ring: &'a [u32], v: u32) -> &'a [u32] {
@@ -164,6 +174,7 @@ impl SelfContacts {
         }
         let mut s = SelfContacts {
             params,
+            broad: Broad::new(params.broad),
             tris: tris.to_vec(),
             edges,
             tri_edges,
@@ -171,9 +182,36 @@ impl SelfContacts {
             ring,
             ..SelfContacts::default()
         };
-        let found = s.find(rest, &vec![params.thickness; n]);
-        s.rest_near = found.into_iter().map(|(key, _)| key).collect();
+        s.set_rest(rest);
         s
+    }
+
+    /// Takes `x` as the starting shape: pairs touching in it (nearer than [`TOUCHING`] times the
+    /// thickness) were never apart and are left out; pairs nearer than the thickness keep their
+    /// distance in it.
+    pub fn set_rest(&mut self, x: &[Vec3]) {
+        let touching = TOUCHING * self.params.thickness;
+        let found = self.find(x, &vec![touching; x.len()]);
+        self.rest_near = found.into_iter().map(|(key, _)| key).collect();
+        self.rest = x.to_vec();
+    }
+
+    /// The distance stencil `st`'s primitives had in the starting shape.
+    fn rest_distance(&self, st: &Stencil) -> Real {
+        let Some(p) =
+            st.v.iter()
+                .map(|&v| self.rest.get(v as usize))
+                .collect::<Option<Vec<_>>>()
+        else {
+            return Real::INFINITY;
+        };
+        let probe = Stencil {
+            v: [0, 1, 2, 3],
+            ..*st
+        };
+        let x: Vec<Vec3> = p.into_iter().copied().collect();
+        let w = probe.weights(&x);
+        (0..4).map(|m| x[m] * w[m]).sum::<Vec3>().norm()
     }
 
     fn near_in_mesh(&self, a: &[u32], b: &[u32]) -> bool {
@@ -188,25 +226,9 @@ impl SelfContacts {
     /// reach is found from one side or the other: each triangle's box is grown by its corners'
     /// largest reach, each query's box by its own.
     fn find(&mut self, x: &[Vec3], reach: &[Real]) -> Vec<(u64, Found)> {
-        self.boxes.clear();
-        for t in &self.tris {
-            let (a, b, c) = (x[t[0] as usize], x[t[1] as usize], x[t[2] as usize]);
-            let pad = Vec3::repeat(t.iter().map(|&v| reach[v as usize]).fold(0.0, Real::max));
-            self.boxes
-                .push((a.inf(&b).inf(&c) - pad, a.sup(&b).sup(&c) + pad));
-        }
-        let per = |n: usize| n.max(1) as Real;
-        let mean = self
-            .edges
-            .iter()
-            .map(|e| (x[e[0] as usize] - x[e[1] as usize]).norm())
-            .sum::<Real>()
-            / per(self.edges.len());
-        let cell = mean.max(reach.iter().sum::<Real>() / per(reach.len()));
-        if !(cell.is_finite() && cell > 0.0) {
+        if !self.index(x, reach) {
             return Vec::new();
         }
-        self.grid.build(&self.boxes, cell);
         let this = &*self;
         let vt = (0..x.len() as u32)
             .into_par_iter()
@@ -223,6 +245,31 @@ impl SelfContacts {
         vt.chain(ee).collect()
     }
 
+    /// The triangles' boxes grown by their corners' largest reach, and the broad phase over
+    /// them; false where the positions are not finite.
+    fn index(&mut self, x: &[Vec3], reach: &[Real]) -> bool {
+        self.boxes.clear();
+        for t in &self.tris {
+            let (a, b, c) = (x[t[0] as usize], x[t[1] as usize], x[t[2] as usize]);
+            let pad = Vec3::repeat(t.iter().map(|&v| reach[v as usize]).fold(0.0, Real::max));
+            self.boxes
+                .push((a.inf(&b).inf(&c) - pad, a.sup(&b).sup(&c) + pad));
+        }
+        let per = |n: usize| n.max(1) as Real;
+        let mean = self
+            .edges
+            .iter()
+            .map(|e| (x[e[0] as usize] - x[e[1] as usize]).norm())
+            .sum::<Real>()
+            / per(self.edges.len());
+        let cell = mean.max(reach.iter().sum::<Real>() / per(reach.len()));
+        if !(cell.is_finite() && cell > 0.0) {
+            return false;
+        }
+        self.broad.build(&self.boxes, (x, &self.edges, reach), cell);
+        true
+    }
+
     fn vertex_pairs(
         &self,
         x: &[Vec3],
@@ -233,8 +280,7 @@ impl SelfContacts {
         let p = x[v as usize];
         let rv = reach[v as usize];
         let (plo, phi) = (p.add_scalar(-rv), p.add_scalar(rv));
-        self.grid
-            .query_once(&plo, &phi, &mut sc.tris, &mut sc.found);
+        self.broad.triangles(&plo, &phi, sc);
         let mut out = Vec::new();
         for &t in sc.found.iter() {
             let tri = self.tris[t as usize];
@@ -260,6 +306,7 @@ impl SelfContacts {
                     normal: d / dist.max(1e-12),
                     lambda: 0.0,
                     gap: dist,
+                    thickness: 0.0,
                 };
                 out.push(((v as u64) << 32 | t as u64, (st, dist)));
             }
@@ -278,21 +325,9 @@ impl SelfContacts {
         let (pa, pb) = (x[a as usize], x[b as usize]);
         let re = reach[a as usize].max(reach[b as usize]);
         let (lo, hi) = (pa.inf(&pb).add_scalar(-re), pa.sup(&pb).add_scalar(re));
-        self.grid.query_once(&lo, &hi, &mut sc.tris, &mut sc.found);
-        sc.edges.next_over(self.edges.len());
-        let mut others = std::mem::take(&mut sc.others);
-        others.clear();
-        for &t in &sc.found {
-            for f in self.tri_edges[t as usize] {
-                if f > e && sc.edges.first(f) {
-                    others.push(f);
-                }
-            }
-        }
-        // Sorted, so the result is the same on any thread count.
-        others.sort_unstable();
+        self.broad.edges(e, (&lo, &hi), &self.tri_edges, sc);
         let mut out = Vec::new();
-        for &f in &others {
+        for &f in &sc.found {
             let [c, d] = self.edges[f as usize];
             let (pc, pd) = (x[c as usize], x[d as usize]);
             let (flo, fhi) = (pc.inf(&pd), pc.sup(&pd));
@@ -316,11 +351,11 @@ impl SelfContacts {
                     normal: off / dist.max(1e-12),
                     lambda: 0.0,
                     gap: dist,
+                    thickness: 0.0,
                 };
                 out.push((1 << 63 | (e as u64) << 32 | f as u64, (st, dist)));
             }
         }
-        sc.others = others;
         out
     }
 
@@ -349,11 +384,12 @@ impl SelfContacts {
                 *b = b.min(p.share * dist);
             }
             if dist < keep {
+                st.thickness = p.thickness.min(REST_SHARE * self.rest_distance(&st));
                 let k =
                     st.v.iter()
                         .map(|&v| stiffness(v as usize))
                         .fold(0.0, Real::max);
-                st.lambda = k * (p.thickness - dist).max(0.0);
+                st.lambda = k * (st.thickness - dist).max(0.0);
                 self.stencils.push(st);
             }
         }

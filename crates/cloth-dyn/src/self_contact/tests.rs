@@ -1,9 +1,11 @@
+//! Tests of the cloth's contact with itself: pairs found and bounded, layers left out or kept at their modelled distance, the energy's push and friction, untangling, and (proptest, judged by parry) no crossing within the bounds.
 use super::*;
 use parry3d_f64::math::{Isometry, Point};
 use parry3d_f64::query::intersection_test;
 use parry3d_f64::shape::Triangle;
 use proptest::prelude::*;
 use tryon_core::math::Mat3;
+use tryon_core::stages::Probe;
 
 /// Two square sheets of n x n cells of side `s`, the second `gap` above the first.
 fn two_sheets(n: u32, s: Real, gap: Real) -> (Vec<Vec3>, Vec<[u32; 3]>) {
@@ -73,16 +75,26 @@ fn layers_a_few_millimetres_apart_are_found_and_bound_their_vertices() {
 }
 
 #[test]
-fn layers_modelled_touching_are_left_out() {
-    let (x, t) = two_sheets(3, 0.02, 0.001);
+fn layers_modelled_touching_are_left_out_and_near_ones_keep_their_distance() {
+    let (x, t) = two_sheets(3, 0.02, 0.0001);
     let mut sc = SelfContacts::new(&t, &x, SelfParams::default());
     sc.detect(&x, &[0.02; 50], |_| 1e4);
     assert!(sc.stencils.is_empty());
+    // Modelled 1 mm apart: held at 0.9 mm, not pushed to the 2 mm thickness.
+    let (x, t) = two_sheets(3, 0.02, 0.001);
+    let mut sc = SelfContacts::new(&t, &x, SelfParams::default());
+    sc.detect(&x, &[0.02; 50], |_| 1e4);
+    assert!(!sc.stencils.is_empty());
+    for st in &sc.stencils {
+        assert!((st.thickness - 0.0009).abs() < 1e-12, "{}", st.thickness);
+        assert_eq!(st.lambda, 0.0);
+    }
 }
 
 #[test]
 fn the_penalty_pushes_the_layers_apart_and_friction_opposes_their_slide() {
     let (mut x, t) = two_sheets(2, 0.02, 0.003);
+    // Modelled 3 mm apart (beyond the thickness), then pressed together.
     let mut sc = SelfContacts::new(&t, &x, SelfParams::default());
     // The upper sheet is pressed to 1 mm over the lower.
     let upper = x.len() / 2;
@@ -134,4 +146,36 @@ fn unclamped_the_same_moves_do_cross() {
     sc.detect(&x0, &[0.02; 32], |_| 1e4);
     sc.clamp_all(&mut x, |_| false);
     assert_eq!(crossings(&x, &t), 0);
+}
+
+#[test]
+fn layers_modelled_through_each_other_are_pulled_apart_outer_outward() {
+    // Two sheets over a floor (z = 0, normal +z): the upper one at 4 mm, except that its middle
+    // row dips to 1 mm under the lower one at 3 mm, so they pass through each other.
+    let (mut x, t) = two_sheets(4, 0.02, 0.004);
+    let upper = x.len() / 2;
+    x[..upper].iter_mut().for_each(|p| p.z = 0.003);
+    for i in 0..5 {
+        x[upper + 2 * 5 + i].z = 0.001;
+    }
+    assert!(crossings(&x, &t) > 0);
+    let mut sc = SelfContacts::new(&t, &x, SelfParams::default());
+    assert!(!sc.crossing_triangles(&x).is_empty());
+    let probes: Vec<Probe> = x
+        .iter()
+        .map(|p| Probe {
+            distance: p.z,
+            normal: Vec3::z(),
+        })
+        .collect();
+    let before = x.clone();
+    let r = sc.untangle(&mut x, &probes, (0.002, 30), |_| false);
+    assert_eq!(crossings(&x, &t), 0, "{r:?}");
+    assert_eq!((r.crossings_after, r.near_after), (0, 0), "{r:?}");
+    assert!(r.crossings_before > 0);
+    // Only upward moves; the lower sheet (inner, nearer the floor) stays put where the upper
+    // one's dip is not under it... every move is along +z.
+    for (a, b) in x.iter().zip(&before) {
+        assert!(a.z >= b.z && (a.x, a.y) == (b.x, b.y));
+    }
 }

@@ -167,8 +167,10 @@ pub struct VbdSim {
     /// Body vertices under cloth triangles, found at the first step of each frame.
     pokes: pokes::Pokes,
     pokes_stale: bool,
-    /// The cloth's contacts with itself (`vbd.self_contact`).
+    /// The cloth's contacts with itself (`vbd.self_contact`), and what untangling the starting
+    /// shape did (`None` until the first step).
     layers: Option<SelfContacts>,
+    untangled: Option<crate::self_contact::Untangled>,
 }
 
 impl VbdSim {
@@ -264,6 +266,7 @@ impl VbdSim {
             pokes: pokes::Pokes::default(),
             pokes_stale: true,
             layers,
+            untangled: None,
         }
     }
 
@@ -550,6 +553,9 @@ impl ClothSolver for VbdSim {
         collider: &mut dyn Collider,
     ) -> StepReport {
         let bad_input = self.model.sanitize(frame);
+        if self.layers.is_some() && self.untangled.is_none() {
+            self.layers_untangle(&mut frame.positions, collider);
+        }
         let (longest, max_speed) = (self.vbd.substep, self.params.max_speed);
         let mut backup = std::mem::take(&mut self.backup);
         // The body moved before this call (the collider's update): its vertices under the cloth

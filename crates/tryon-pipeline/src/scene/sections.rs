@@ -107,6 +107,21 @@ pub struct ClothSection {
     /// Distance the cloth keeps from itself with `effects.self_collision` (m).
     #[schemars(range(min = 1e-4, max = 0.02))]
     pub self_thickness: Real,
+    /// How self-contact finds candidate pairs: `tree` (bounding volume hierarchies refitted
+    /// each step) or `hash` (a spatial hash rebuilt each step); the results agree, the tree is
+    /// faster (docs/decisions.md).
+    pub self_broad_phase: BroadPhaseName,
+}
+
+/// A broad phase of self-contact.
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, JsonSchema, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum BroadPhaseName {
+    /// Bounding volume hierarchies over triangles and edges, refitted each step.
+    #[default]
+    Tree,
+    /// A spatial hash of the triangles, rebuilt each step.
+    Hash,
 }
 
 impl Default for ClothSection {
@@ -145,6 +160,7 @@ impl Default for ClothSection {
             vbd_limit: vbd.limit,
             vbd_limit_passes: vbd.limit_passes,
             self_thickness: cloth_dyn::self_contact::SelfParams::default().thickness,
+            self_broad_phase: BroadPhaseName::default(),
         }
     }
 }
