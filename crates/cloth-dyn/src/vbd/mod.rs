@@ -584,4 +584,6 @@ impl ClothSolver for VbdSim {
 }
 
 #[cfg(test)]
+mod layer_tests;
+#[cfg(test)]
 mod tests;
