@@ -24,6 +24,7 @@ macro_rules! logln {
     }};
 }
 
+mod layers;
 mod report;
 mod solvers;
 

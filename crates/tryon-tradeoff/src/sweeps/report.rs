@@ -72,6 +72,7 @@ pub fn run_all(quick: bool, out: &Path, summary: Option<&Path>) -> Result<(), St
     let spot = spot_sweep(quick, &mut log)?;
     let guard = guard_sweep(quick, &mut log)?;
     let solvers = super::solvers::solver_sweep(quick, &mut log)?;
+    let layers = super::layers::layer_sweep(quick, &mut log)?;
 
     // Plots.
     let mut plots = Vec::new();
@@ -226,6 +227,9 @@ pub fn run_all(quick: bool, out: &Path, summary: Option<&Path>) -> Result<(), St
     if solvers.len() != super::solvers::POINTS {
         empty.push("solvers".into());
     }
+    if layers.len() != super::layers::POINTS {
+        empty.push("self-contact".into());
+    }
 
     // Report.
     let mut r = String::new();
@@ -345,6 +349,7 @@ pub fn run_all(quick: bool, out: &Path, summary: Option<&Path>) -> Result<(), St
         );
     }
     super::solvers::section(&mut r, &solvers);
+    super::layers::section(&mut r, &layers);
     let _ = writeln!(r, "\n## Plots\n");
     for f in &plots {
         let _ = writeln!(r, "![{f}]({f})\n");

@@ -1,0 +1,87 @@
+//! (h) What the cloth's contact with itself costs and buys on every scene: VBD with
+//! `[effects] self_collision` off and on (each scene's own settings otherwise).
+
+use super::*;
+
+/// One scene with self-contact off or on.
+#[derive(Clone, Debug)]
+pub(super) struct LayerPoint {
+    pub scene: &'static str,
+    pub on: bool,
+    pub crossings: usize,
+    pub max_mm: Real,
+    pub max_stretch: Real,
+    pub cloth_ms: Real,
+}
+
+/// The scenes compared, with the frames of a quick run (`None`: the scene's own length).
+const SCENES: [(&str, Option<usize>); 5] = [
+    ("drape-sphere.toml", Some(30)),
+    ("demo-dress-walk.toml", Some(12)),
+    ("skirt-walk.toml", Some(12)),
+    ("makehuman-dress-walk.toml", Some(4)),
+    ("makehuman-casual-131.toml", Some(4)),
+];
+
+/// Points a complete sweep makes.
+pub(super) const POINTS: usize = SCENES.len() * 2;
+
+pub(super) fn layer_sweep(quick: bool, log: &mut String) -> Result<Vec<LayerPoint>, String> {
+    let mut out = Vec::new();
+    for (file, quick_frames) in SCENES {
+        for on in [false, true] {
+            let sets = vec![
+                "cloth.solver=\"vbd\"".to_string(),
+                format!("effects.self_collision={on}"),
+            ];
+            let frames = if quick { quick_frames } else { None };
+            let (s, _) = run_scene(file, &sets, frames)?;
+            let m = &s.metrics;
+            let p = LayerPoint {
+                scene: file.trim_end_matches(".toml"),
+                on,
+                crossings: m.cloth_intersections,
+                max_mm: m.max_penetration_m * 1e3,
+                max_stretch: m.max_stretch,
+                cloth_ms: stage_ms(&s, &["cloth"]),
+            };
+            logln!(
+                log,
+                "self-contact {} {}: {} crossing pairs, penetration {:.2} mm, stretch {:.3}, cloth {:.2} ms",
+                p.scene,
+                if on { "on" } else { "off" },
+                p.crossings,
+                p.max_mm,
+                p.max_stretch,
+                p.cloth_ms
+            );
+            out.push(p);
+        }
+    }
+    Ok(out)
+}
+
+/// The report's section (h).
+pub(super) fn section(r: &mut String, points: &[LayerPoint]) {
+    let _ = writeln!(r, "\n## (h) The cloth against itself\n");
+    let _ = writeln!(
+        r,
+        "`[effects] self_collision` under VBD, off and on: the most crossing pairs of garment triangles in a frame (the referee, `tryon-pipeline/src/crossings.rs`), penetration into the body, stretch, and the cloth step's cost.\n"
+    );
+    let _ = writeln!(
+        r,
+        "| scene | self-contact | crossing pairs | penetration max mm | stretch max | cloth ms/frame |\n|---|---|---|---|---|---|"
+    );
+    for p in points {
+        let _ = writeln!(
+            r,
+            "| {} | {} | {} | {:.2} | {:.3} | {:.2} |",
+            p.scene,
+            if p.on { "on" } else { "off" },
+            p.crossings,
+            p.max_mm,
+            p.max_stretch,
+            p.cloth_ms
+        );
+    }
+}
