@@ -9,8 +9,8 @@
 //! contact, whatever path the vertices take (each primitive's points move no farther than its
 //! farthest vertex). The cloth then never passes through itself where it did not at the start.
 //!
-//! Left out of both the pairs and the bounds: primitives sharing a vertex, primitives within one
-//! ring of each other in the mesh unless they face each other (`FACING`: neighbours in the
+//! Left out of both the pairs and the bounds: primitives sharing a vertex, primitives within two
+//! rings of each other in the mesh unless they face each other (`FACING`: neighbours in the
 //! cloth's own plane are held by its springs, a sharp fold brings one face on), and pairs nearer
 //! than a tenth of the thickness in the starting shape (layers modelled touching, or crossing, as
 //! some MakeHuman garments are: they were never apart). A pair nearer than the thickness there
@@ -28,7 +28,7 @@ use std::collections::HashSet;
 use tryon_core::math::{Real, Vec3};
 pub use untangle::Untangled;
 
-/// Primitives within one ring of each other in the mesh pair up only where they face each
+/// Primitives within two rings of each other in the mesh pair up only where they face each
 /// other: the offset between them makes at least this cosine with the triangle's normal (or the
 /// two edges' common normal). Neighbours in the cloth's own plane are held by its springs; a
 /// sharp fold brings a neighbour's neighbour face on.
@@ -39,6 +39,9 @@ const TOUCHING: Real = 0.1;
 
 /// A pair nearer than the thickness in the starting shape keeps this share of its distance there.
 const REST_SHARE: Real = 0.9;
+
+/// Edges whose cross product is below this share of their lengths' product are parallel.
+const PARALLEL: Real = 0.1;
 
 /// Fewest queries a thread takes at once.
 const CHUNK: usize = 64;
@@ -106,6 +109,9 @@ pub struct SelfContacts {
     /// Per vertex, itself and its neighbours, sorted (CSR).
     ring_start: Vec<u32>,
     ring: Vec<u32>,
+    /// Per vertex, the vertices within two rings, sorted (CSR).
+    near_start: Vec<u32>,
+    near: Vec<u32>,
     /// Vertex-triangle (`v << 32 | t`) and edge-edge (`1 << 63 | e << 32 | f`) pairs touching
     /// in the starting shape.
     rest_near: HashSet<u64>,
@@ -172,8 +178,21 @@ impl SelfContacts {
             ring.extend(l);
             ring_start.push(ring.len() as u32);
         }
+        let (mut near_start, mut near) = (vec![0u32], Vec::new());
+        for v in 0..n as u32 {
+            let mut l: Vec<u32> = ring_of(&ring_start, &ring, v)
+                .iter()
+                .flat_map(|&u| ring_of(&ring_start, &ring, u).iter().copied())
+                .collect();
+            l.sort_unstable();
+            l.dedup();
+            near.extend(l);
+            near_start.push(near.len() as u32);
+        }
         let mut s = SelfContacts {
             params,
+            near_start,
+            near,
             broad: Broad::new(params.broad),
             tris: tris.to_vec(),
             edges,
@@ -216,7 +235,7 @@ impl SelfContacts {
 
     fn near_in_mesh(&self, a: &[u32], b: &[u32]) -> bool {
         a.iter().any(|&u| {
-            let r = ring_of(&self.ring_start, &self.ring, u);
+            let r = ring_of(&self.near_start, &self.near, u);
             b.iter().any(|w| r.binary_search(w).is_ok())
         })
     }
@@ -340,8 +359,10 @@ impl SelfContacts {
             let off = pa + (pb - pa) * s - pc - (pd - pc) * t;
             let dist = off.norm();
             let facing = || {
+                // Parallel edges have no common normal: side by side, not facing.
                 let n = (pb - pa).cross(&(pd - pc));
-                n.dot(&off).abs() >= FACING * n.norm() * dist
+                let square = (pb - pa).norm() * (pd - pc).norm();
+                n.norm() > PARALLEL * square && n.dot(&off).abs() >= FACING * n.norm() * dist
             };
             if dist < re.max(rf) && (!self.near_in_mesh(&[a, b], &[c, d]) || facing()) {
                 let st = Stencil {
