@@ -470,4 +470,4 @@ impl SelfContacts {
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

@@ -5,43 +5,9 @@
 
 use super::*;
 use crate::self_contact::SelfParams;
-use parry3d_f64::math::{Isometry, Point};
-use parry3d_f64::query::intersection_test;
-use parry3d_f64::shape::Triangle;
+use crate::self_contact::tests::crossings;
 use tryon_core::mesh::{Face, PolyMesh, grid_xz};
 use tryon_core::stages::NoCollider;
-
-/// Crossing pairs of triangles sharing no vertex (boxes first, then parry).
-fn crossings(x: &[Vec3], t: &[[u32; 3]]) -> usize {
-    let boxes: Vec<(Vec3, Vec3)> = t
-        .iter()
-        .map(|f| {
-            let p = f.map(|i| x[i as usize]);
-            (p[0].inf(&p[1]).inf(&p[2]), p[0].sup(&p[1]).sup(&p[2]))
-        })
-        .collect();
-    let tri = |f: &[u32; 3]| {
-        let p = |i: u32| Point::from(x[i as usize]);
-        Triangle::new(p(f[0]), p(f[1]), p(f[2]))
-    };
-    let id = Isometry::identity();
-    let mut n = 0;
-    for a in 0..t.len() {
-        for b in a + 1..t.len() {
-            let ((alo, ahi), (blo, bhi)) = (boxes[a], boxes[b]);
-            if (0..3).any(|k| alo[k] > bhi[k] || blo[k] > ahi[k]) {
-                continue;
-            }
-            if t[a].iter().any(|v| t[b].contains(v)) {
-                continue;
-            }
-            if intersection_test(&id, &tri(&t[a]), &id, &tri(&t[b])).unwrap_or(false) {
-                n += 1;
-            }
-        }
-    }
-    n
-}
 
 /// A thin horizontal bar along z through the origin.
 struct Bar {
