@@ -3,6 +3,7 @@
 //! triangle pair at any frame (parry's GJK as judge) and finite state, and that without
 //! self-contact the same run does cross (so the assertion can fail).
 
+use super::tests::out_of_sphere;
 use super::*;
 use crate::self_contact::SelfParams;
 use crate::self_contact::tests::crossings;
@@ -20,21 +21,9 @@ impl Collider for Bar {
     }
     fn update(&mut self, _body: &tryon_core::frames::BodyFrame) {}
     fn resolve(&mut self, points: &mut [Vec3], contacts: &mut Vec<Contact>) {
+        // Out of the bar: out of the circle around its axis in the point's own plane.
         for (k, p) in points.iter_mut().enumerate() {
-            let radial = Vec3::new(p.x, p.y, 0.0);
-            let d = radial.norm() - self.r;
-            if d < 0.0 && radial.norm() > 0.0 {
-                let n = radial / radial.norm();
-                contacts.push(Contact {
-                    point: k as u32,
-                    face: 0,
-                    bary: [1.0, 0.0, 0.0],
-                    normal: n,
-                    depth: -d,
-                    body_velocity: Vec3::zeros(),
-                });
-                *p = Vec3::new(n.x * self.r, n.y * self.r, p.z);
-            }
+            out_of_sphere(k, p, Vec3::new(0.0, 0.0, p.z), self.r, contacts);
         }
     }
     fn signed_distance(&self, p: &Vec3) -> Option<Real> {

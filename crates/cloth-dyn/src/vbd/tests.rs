@@ -53,7 +53,7 @@ fn any_stiffness_is_stable_at_the_frames_step() {
 }
 
 /// Moves point `k` at `p` out of the sphere of radius `r` at `c` onto its surface, with a contact.
-fn out_of_sphere(k: usize, p: &mut Vec3, c: Vec3, r: Real, contacts: &mut Vec<Contact>) {
+pub(super) fn out_of_sphere(k: usize, p: &mut Vec3, c: Vec3, r: Real, contacts: &mut Vec<Contact>) {
     let d = (*p - c).norm() - r;
     if d < 0.0 {
         let n = (*p - c) / (*p - c).norm();
