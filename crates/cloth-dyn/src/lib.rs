@@ -20,6 +20,7 @@ pub mod self_contact;
 pub mod solver;
 pub mod strain;
 pub mod vbd;
+pub mod wear;
 pub mod xpbd;
 
 pub use integrator::{Derivative, Integrator, IntegratorKind, Rk4, SymplecticEuler};

@@ -134,6 +134,14 @@ pub struct ClothModel {
     pub long_range_springs: Vec<crate::strain::LimitSpring>,
     /// Stencils of the quadratic bending model (empty unless `bending_rigidity > 0`).
     pub hinges: Vec<crate::hinges::Hinge>,
+    /// Per particle, the garment it belongs to (0 for a cloth of one garment; see
+    /// [`ClothModel::wear`]).
+    pub garment: Vec<u16>,
+    /// Per particle, its garment's layer (higher is worn over lower).
+    pub layer: Vec<u32>,
+    /// Per spring, its garment's stiffness as a multiple of the parameters' (the solvers that
+    /// take stiffness from their own settings, VBD and XPBD, scale by it).
+    pub spring_scale: Vec<Real>,
 }
 
 impl ClothModel {
@@ -257,6 +265,9 @@ impl ClothModel {
         };
         let hinges = crate::hinges::build_hinges(pos, &triangles, params.bending_rigidity);
         Ok(ClothModel {
+            garment: vec![0; n],
+            layer: vec![0; n],
+            spring_scale: vec![1.0; springs.len()],
             hinges,
             long_range_springs,
             limit_springs: crate::strain::limit_springs(&springs, 0..shear.end, &inv_mass),

@@ -247,6 +247,20 @@ pub struct ClothInfo {
     pub masses: Vec<Real>,
 }
 
+/// What a solver with contact between layers of cloth did to the starting shape before its
+/// first step: layers modelled crossing or touching pulled apart.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Untangled {
+    /// Crossing triangle pairs before and after.
+    pub crossings_before: usize,
+    pub crossings_after: usize,
+    /// Pairs nearer than nine tenths of the gap after.
+    pub near_after: usize,
+    /// Vertices moved, and the farthest move (m).
+    pub moved: usize,
+    pub farthest: Real,
+}
+
 /// One frame of coarse cloth dynamics against a collider.
 pub trait ClothSolver: Send {
     /// What the solver is (constant over its life but for the grabbed particles).
@@ -268,6 +282,11 @@ pub trait ClothSolver: Send {
     /// Hands `handle.particle` to a scripted path from now on (a user grabbing the cloth). A
     /// particle it does not have, or an empty path, is ignored.
     fn grab(&mut self, handle: Handle);
+    /// What untangling the starting shape did, once the first step ran (solvers with contact
+    /// between layers of cloth; `None` for the others).
+    fn untangled(&self) -> Option<Untangled> {
+        None
+    }
 }
 
 /// Where a surface stage's work is timed: `work` runs once, its wall time counted under `part`.

@@ -20,13 +20,15 @@ pub mod broad;
 mod energy;
 pub mod geom;
 pub mod grid;
+mod keep;
+pub mod stage;
 mod untangle;
 
 use broad::{Broad, BroadPhase, Scratch};
 use rayon::prelude::*;
 use std::collections::HashSet;
 use tryon_core::math::{Real, Vec3};
-pub use untangle::Untangled;
+pub use tryon_core::stages::Untangled;
 
 /// Primitives within two rings of each other in the mesh pair up only where they face each
 /// other: the offset between them makes at least this cosine with the triangle's normal (or the
@@ -60,6 +62,12 @@ pub struct SelfParams {
     pub friction: Real,
     /// How candidate pairs are found.
     pub broad: BroadPhase,
+    /// Pairs within one garment (the cloth against itself).
+    pub within: bool,
+    /// Pairs between garments (layers worn over each other).
+    pub between: bool,
+    /// Untangling also opens pairs nearer than the gap (else only crossing triangles).
+    pub untangle_near: bool,
 }
 
 impl Default for SelfParams {
@@ -70,6 +78,9 @@ impl Default for SelfParams {
             reach: 0.005,
             friction: 0.3,
             broad: BroadPhase::default(),
+            within: true,
+            between: true,
+            untangle_near: true,
         }
     }
 }
@@ -128,6 +139,13 @@ pub struct SelfContacts {
     by_vertex: Vec<(u32, u8)>,
     /// Positions detection saw.
     pub seen: Vec<Vec3>,
+    /// How far the last detection looked, per vertex (m).
+    pub reach: Vec<Real>,
+    /// The cloth's shape at its last frame's end (none crossing), set by the solver.
+    pub last_end: Vec<Vec3>,
+    /// Per vertex, its garment and its garment's layer (empty: one garment).
+    garment: Vec<u16>,
+    layer: Vec<u32>,
 }
 
 impl Stencil {
@@ -203,6 +221,33 @@ impl SelfContacts {
         };
         s.set_rest(rest);
         s
+    }
+
+    /// The same contacts over several garments: vertex `v` belongs to garment `garment[v]`,
+    /// worn in layer `layer[v]` (higher over lower). Pairs within a garment count with
+    /// `params.within`, between garments with `params.between`; untangling moves the higher
+    /// layer out.
+    pub fn with_garments(mut self, garment: &[u16], layer: &[u32]) -> Self {
+        self.garment = garment.to_vec();
+        self.layer = layer.to_vec();
+        let rest = std::mem::take(&mut self.rest);
+        self.set_rest(&rest);
+        self
+    }
+
+    /// Whether pairs between vertices `a` and `b`'s garments count.
+    fn wanted(&self, a: u32, b: u32) -> bool {
+        let g = |v: u32| self.garment.get(v as usize).copied().unwrap_or(0);
+        if g(a) == g(b) {
+            self.params.within
+        } else {
+            self.params.between
+        }
+    }
+
+    /// Vertex `v`'s layer (0 for one garment).
+    fn layer_of(&self, v: u32) -> u32 {
+        self.layer.get(v as usize).copied().unwrap_or(0)
     }
 
     /// Takes `x` as the starting shape: pairs touching in it (nearer than [`TOUCHING`] times the
@@ -305,7 +350,7 @@ impl SelfContacts {
             let tri = self.tris[t as usize];
             let (lo, hi) = &self.boxes[t as usize];
             let meets = (0..3).all(|k| lo[k] <= phi[k] && plo[k] <= hi[k]);
-            if !meets || tri.contains(&v) {
+            if !meets || tri.contains(&v) || !self.wanted(v, tri[0]) {
                 continue;
             }
             let c = tri.map(|i| x[i as usize]);
@@ -352,7 +397,7 @@ impl SelfContacts {
             let (flo, fhi) = (pc.inf(&pd), pc.sup(&pd));
             let rf = reach[c as usize].max(reach[d as usize]);
             let apart = (0..3).any(|k| flo[k] - rf > hi[k] || lo[k] > fhi[k] + rf);
-            if apart || [a, b].iter().any(|v| [c, d].contains(v)) {
+            if apart || [a, b].iter().any(|v| [c, d].contains(v)) || !self.wanted(a, c) {
                 continue;
             }
             let (s, t) = geom::segment_segment(&pa, &pb, &pc, &pd);
@@ -380,10 +425,10 @@ impl SelfContacts {
         out
     }
 
-    /// Finds the pairs at `x` (the step's start) and each vertex's bound, each vertex looking as
-    /// far as its `reach` (at least the distance a pair must have to stay beyond the thickness
-    /// in a step); `stiffness(v)` is the contact penalty of vertex `v` (N/m), for the lagged
-    /// friction's normal force.
+    /// Finds the pairs at `x` (the step's start, or where a sweep left the cloth) and each
+    /// vertex's bound, each vertex looking as far as its `reach` (at least the distance a pair
+    /// must have to stay beyond the thickness in a step); `stiffness(v)` is the contact penalty
+    /// of vertex `v` (N/m), for the lagged friction's normal force.
     pub fn detect(&mut self, x: &[Vec3], reach: &[Real], stiffness: impl Fn(usize) -> Real) {
         let p = self.params;
         // A pair farther than this cannot come within the thickness in one step.
@@ -395,6 +440,7 @@ impl SelfContacts {
         self.seen.extend_from_slice(x);
         self.bound.clear();
         self.bound.extend(reach.iter().map(|r| p.share * r));
+        self.reach = reach;
         self.stencils.clear();
         for (key, (mut st, dist)) in found {
             if self.rest_near.contains(&key) {

@@ -14,20 +14,7 @@ use parry3d_f64::query::intersection_test;
 use parry3d_f64::shape::Triangle;
 use rayon::prelude::*;
 use tryon_core::math::{Real, Vec3};
-use tryon_core::stages::Probe;
-
-/// What untangling did.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Untangled {
-    /// Crossing triangle pairs before and after.
-    pub crossings_before: usize,
-    pub crossings_after: usize,
-    /// Pairs nearer than nine tenths of the gap after.
-    pub near_after: usize,
-    /// Vertices moved, and the farthest move (m).
-    pub moved: usize,
-    pub farthest: Real,
-}
+use tryon_core::stages::{Probe, Untangled};
 
 fn triangle(x: &[Vec3], t: &[u32; 3]) -> Triangle {
     let p = |i: u32| Point::from(x[i as usize]);
@@ -103,12 +90,14 @@ impl SelfContacts {
             .collect();
         let id = Isometry::identity();
         let tris = &self.tris;
+        let this = &*self;
         let mut out: Vec<[u32; 2]> = cand
             .into_par_iter()
             .filter(|[s, t]| {
                 let (a, b) = (&tris[*s as usize], &tris[*t as usize]);
                 s != t
                     && !a.iter().any(|v| b.contains(v))
+                    && this.wanted(a[0], b[0])
                     && intersection_test(&id, &triangle(x, a), &id, &triangle(x, b))
                         .unwrap_or(false)
             })
@@ -118,8 +107,9 @@ impl SelfContacts {
     }
 
     /// Moves the outer side of crossing and touching pairs outward (`probes`: each vertex's body
-    /// distance and outward normal at `x`) until no triangle pair crosses and no pair is nearer
-    /// than nine tenths of `gap`, in at most `passes` passes. Vertices `fixed` says are led from outside stay.
+    /// distance and outward normal at `x`) until no triangle pair crosses and (with
+    /// `params.untangle_near`) no pair is nearer than nine tenths of `gap`, in at most `passes`
+    /// passes. Vertices `fixed` says are led from outside stay.
     pub fn untangle(
         &mut self,
         x: &mut [Vec3],
@@ -136,7 +126,10 @@ impl SelfContacts {
         };
         for pass in 0..=passes {
             let crossing = self.crossing_triangles(x);
-            let near = self.find(x, &vec![NEAR * gap; x.len()]);
+            let near = match self.params.untangle_near {
+                true => self.find(x, &vec![NEAR * gap; x.len()]),
+                false => Vec::new(),
+            };
             if pass == 0 {
                 report.crossings_before = crossing.len();
             }
@@ -151,7 +144,9 @@ impl SelfContacts {
                     tangled[*v as usize] = true;
                 }
             }
-            let depth = |v: u32| self.layer_depth(v, &tangled, raw);
+            // A garment's layer ranks first; within one, the depth of the vertex's layer of cloth.
+            let depth =
+                |v: u32| 4.0 * self.layer_of(v) as Real + self.layer_depth(v, &tangled, raw);
             let mut push = vec![0.0; x.len()];
             for [s, t] in &crossing {
                 let (a, b) = (self.tris[*s as usize], self.tris[*t as usize]);
@@ -184,14 +179,21 @@ impl SelfContacts {
                     }
                 }
             }
+            let mut changed = false;
             for (v, p) in push.iter().enumerate() {
                 let n = probes.get(v).map_or(Vec3::zeros(), |q| q.normal);
                 if *p > 0.0 && !fixed(v) && n != Vec3::zeros() {
                     // Never farther than the cap from where it was modelled: a tangle the cap
                     // leaves (a button sewn through the cloth) stays, left out as never apart.
                     let moved = x[v] + n * *p - start[v];
-                    x[v] = start[v] + moved * (MAX_MOVE * gap / moved.norm()).min(1.0);
+                    let to = start[v] + moved * (MAX_MOVE * gap / moved.norm()).min(1.0);
+                    changed |= to != x[v];
+                    x[v] = to;
                 }
+            }
+            if !changed {
+                // What is left cannot move (capped, led from outside, or side by side).
+                break;
             }
         }
         for (a, b) in x.iter().zip(&start) {

@@ -3,7 +3,6 @@
 //! the cloth does not pass through itself.
 
 use super::VbdSim;
-use crate::self_contact::Untangled;
 use tryon_core::math::{Real, Vec3};
 use tryon_core::stages::Collider;
 
@@ -15,13 +14,39 @@ const UNTANGLE_PASSES: u32 = 30;
 const MAX_REACH: Real = 0.02;
 
 impl VbdSim {
+    /// At a frame's start: before the first frame, the starting shape untangled
+    /// (`layers_untangle`); after, the pairs that moves between frames (the body following's
+    /// carry) closed or crossed since the last frame's end opened again
+    /// (`SelfContacts::carry_apart`).
+    pub(super) fn layers_frame_start(&mut self, x: &mut [Vec3], collider: &mut dyn Collider) {
+        if self.layers.is_some() && self.untangled.is_none() {
+            self.layers_untangle(x, collider);
+        }
+        let inv_mass = &self.model.inv_mass;
+        if let Some(sc) = self.layers.as_mut()
+            && sc.last_end.len() == x.len()
+        {
+            let from = std::mem::take(&mut sc.last_end);
+            sc.carry_apart(x, &from, |i| inv_mass[i] == 0.0);
+        }
+    }
+
+    /// Records the frame's end shape `x` (no pair crossing), from which the next frame's start
+    /// (after the body following's carry) is judged.
+    pub(super) fn layers_frame_end(&mut self, x: &[Vec3]) {
+        if let Some(sc) = self.layers.as_mut() {
+            sc.last_end.clear();
+            sc.last_end.extend_from_slice(x);
+        }
+    }
+
     /// Before the first step: layers crossing or touching in the starting shape `x` pulled
     /// apart toward the thickness, the outer one outward along the body's normal, no vertex
     /// farther than two thicknesses (`SelfContacts::untangle`); that shape is then the one whose
     /// touching pairs are left out and whose near pairs keep their distance (`set_rest`). The
     /// elegant suit's 95 crossing pairs fall to 6; the casual suit's 30, between 2-3 mm
     /// triangles at the front of the waist, stay.
-    pub(super) fn layers_untangle(&mut self, x: &mut [Vec3], collider: &mut dyn Collider) {
+    fn layers_untangle(&mut self, x: &mut [Vec3], collider: &mut dyn Collider) {
         let Some(mut sc) = self.layers.take() else {
             return;
         };
@@ -33,11 +58,6 @@ impl VbdSim {
         sc.set_rest(x);
         self.untangled = Some(report);
         self.layers = Some(sc);
-    }
-
-    /// What untangling did before the first step (with self-contact).
-    pub fn untangled(&self) -> Option<Untangled> {
-        self.untangled
     }
 
     /// Finds the step's self-contacts at its start (`prev`) and brings the first guess `x` within
@@ -61,12 +81,37 @@ impl VbdSim {
         self.layers = Some(sc);
     }
 
+    /// Detection again from `x`, where a sweep held some vertex at its bound (Chen et al.'s
+    /// offset geometric contact redoes detection as vertices reach their bounds): each vertex
+    /// may then move its bound again. Layers in contact slide past each other, and an inner
+    /// layer pushed by a limb pushes the outer one, as far as the iterations allow, not only a
+    /// share of the gap in a step.
+    pub(super) fn layers_redetect(&mut self, x: &[Vec3]) {
+        let Some(mut sc) = self.layers.take() else {
+            return;
+        };
+        let reach = std::mem::take(&mut sc.reach);
+        sc.detect(x, &reach, |v| self.penalty(v));
+        self.layers = Some(sc);
+    }
+
     /// Every free vertex of `x` brought back within its bound (after a pass that moves many at
     /// once: the tethers, the strain limit).
     pub(super) fn layers_clamp(&self, x: &mut [Vec3]) {
         if let Some(sc) = &self.layers {
             let inv_mass = &self.model.inv_mass;
             sc.clamp_all(x, |i| inv_mass[i] == 0.0);
+        }
+    }
+}
+
+impl VbdSim {
+    /// After the body's fail-safe moved `x` from `before`: layers it pushed into the layer over
+    /// them opened again (`SelfContacts::keep_apart`).
+    pub(super) fn layers_keep(&self, x: &mut [Vec3], before: &[Vec3]) {
+        if let Some(sc) = &self.layers {
+            let inv_mass = &self.model.inv_mass;
+            sc.keep_apart(x, before, |i| inv_mass[i] == 0.0);
         }
     }
 }

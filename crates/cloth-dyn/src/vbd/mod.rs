@@ -18,10 +18,15 @@ mod layers;
 mod linalg;
 mod pairs;
 mod pokes;
+mod sweep;
 
 /// Fewest vertices a thread takes at once in a colour's sweep: below this the hand-over costs more
 /// than the Newton steps it shares out.
 const PAR_CHUNK: usize = 32;
+
+/// Self-contact is detected again after an iteration that held more than one in this many
+/// vertices at their bounds (`layers_redetect`).
+const REDETECT: usize = 25;
 
 use crate::model::{ClothModel, Handle};
 use crate::params::ClothParams;
@@ -29,7 +34,6 @@ use crate::retry::frame_with_retries;
 use crate::self_contact::{SelfContacts, SelfParams};
 use crate::strain::{ContactPlane, Tethers, limit_strain};
 use linalg::{add_outer, solve_spd3};
-use rayon::prelude::*;
 use tryon_core::frames::{CoarseFrame, Contact, StepReport};
 use tryon_core::math::{Mat3, Real, Vec3, is_finite};
 use tryon_core::stages::{ClothInfo, ClothSolver, Collider, Probe};
@@ -181,11 +185,12 @@ impl VbdSim {
         let mut lists: Vec<Vec<Arm>> = vec![Vec::new(); n];
         for k in 0..s.len() {
             let (i, j, rest) = (s.i[k], s.j[k], s.rest[k] * params.rest_scale);
-            let per_rest = if model.bend.contains(&k) {
-                vbd.bend
-            } else {
-                vbd.stretch
-            };
+            let per_rest = model.spring_scale.get(k).copied().unwrap_or(1.0)
+                * if model.bend.contains(&k) {
+                    vbd.bend
+                } else {
+                    vbd.stretch
+                };
             if per_rest == 0.0 {
                 continue;
             }
@@ -228,9 +233,9 @@ impl VbdSim {
         bending::add_stencil_neighbours(&stencils, &blocks, &mut neighbours);
         let (order, colours) = colour::vertices(&neighbours);
         let spring_sum = lists.iter().map(|l| l.iter().map(|a| a.k).sum()).collect();
-        let layers = vbd
-            .self_contact
-            .map(|p| SelfContacts::new(&model.triangles, rest, p));
+        let layers = vbd.self_contact.map(|p| {
+            SelfContacts::new(&model.triangles, rest, p).with_garments(&model.garment, &model.layer)
+        });
         let z = vec![Vec3::zeros(); n];
         VbdSim {
             model,
@@ -461,9 +466,13 @@ impl VbdSim {
         }
         let mut dx = std::mem::take(&mut self.dx);
         for _ in 0..self.vbd.iterations.max(1) {
+            let mut clamped = 0;
             for r in self.colours.clone() {
                 self.sweep_colour(x, &self.order[r.clone()], h, &mut dx);
-                self.apply(x, r, &dx);
+                clamped += self.apply(x, r, &dx);
+            }
+            if clamped > x.len() / REDETECT {
+                self.layers_redetect(x);
             }
             if tethers {
                 self.tethers.project(1.0, x);
@@ -474,36 +483,6 @@ impl VbdSim {
             }
         }
         self.dx = dx;
-    }
-
-    /// Moves the blocks of colour range `r` by their steps `dx` (non-finite steps are dropped),
-    /// and their hinges' angles with them.
-    fn apply(&mut self, x: &mut [Vec3], r: std::ops::Range<usize>, dx: &[[Vec3; 2]]) {
-        for (d, &b) in dx.iter().zip(&self.order[r]) {
-            for (dv, &v) in d.iter().zip(&self.blocks[b as usize]) {
-                if v != pairs::ALONE && is_finite(dv) {
-                    let (v, old) = (v as usize, x[v as usize]);
-                    x[v] += dv;
-                    if let Some(sc) = &self.layers {
-                        sc.clamp(v, &mut x[v]);
-                    }
-                    self.hinges.moved(v, &(x[v] - old));
-                }
-            }
-        }
-    }
-
-    /// One Newton step on every vertex of one colour, into `dx`: the steps are found in parallel
-    /// (no two vertices of a colour share a spring or a hinge, so each reads only vertices it does
-    /// not move) and applied after (`apply`), so the result is the same for any number of threads.
-    fn sweep_colour(&self, x: &[Vec3], ids: &[u32], h: Real, dx: &mut Vec<[Vec3; 2]>) {
-        dx.clear();
-        dx.resize(ids.len(), [Vec3::zeros(); 2]);
-        let xs = x;
-        dx.par_iter_mut()
-            .with_min_len(PAR_CHUNK)
-            .zip(ids.par_iter())
-            .for_each(|(d, &b)| *d = self.descend(xs, b as usize, h));
     }
 
     /// One step of `h` from `t0`, during which the body covers the fraction `span` of its last
@@ -521,7 +500,11 @@ impl VbdSim {
         self.solve(&mut x, h);
         self.limit(&mut x);
         self.layers_clamp(&mut x);
+        let before = self.layers.as_ref().map(|_| x.clone());
         self.fail_safe(&mut x, span, collider);
+        if let Some(b) = before {
+            self.layers_keep(&mut x, &b);
+        }
         frame.positions = x;
         let max2 = self.params.max_speed * self.params.max_speed;
         let mut bad = 0;
@@ -537,6 +520,9 @@ impl VbdSim {
 }
 
 impl ClothSolver for VbdSim {
+    fn untangled(&self) -> Option<crate::self_contact::Untangled> {
+        self.untangled
+    }
     fn info(&self) -> ClothInfo {
         self.model
             .info("vbd", self.vbd.substep, self.arms.len() / 2)
@@ -553,9 +539,7 @@ impl ClothSolver for VbdSim {
         collider: &mut dyn Collider,
     ) -> StepReport {
         let bad_input = self.model.sanitize(frame);
-        if self.layers.is_some() && self.untangled.is_none() {
-            self.layers_untangle(&mut frame.positions, collider);
-        }
+        self.layers_frame_start(&mut frame.positions, collider);
         let (longest, max_speed) = (self.vbd.substep, self.params.max_speed);
         let mut backup = std::mem::take(&mut self.backup);
         // The body moved before this call (the collider's update): its vertices under the cloth
@@ -567,6 +551,7 @@ impl ClothSolver for VbdSim {
         let mut report =
             frame_with_retries(frame, dt, longest, max_speed, bad_input, &mut backup, step);
         self.backup = backup;
+        self.layers_frame_end(&frame.positions);
         frame.contacts.clone_from(&self.contacts);
         report.contacts = frame.contacts.len() as u32;
         report
