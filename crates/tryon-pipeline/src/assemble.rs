@@ -8,6 +8,7 @@ use crate::pipeline::Pipeline;
 use crate::scene::{CollisionMethod, GarmentSection, Scene};
 use body_collide::{Bands, BodyFollower, BodyMesh, ExactCollider, FollowParams};
 use cloth_dyn::Handle;
+use cloth_dyn::self_contact::stage::FineLayers;
 use tryon_core::frames::FineSurface;
 use tryon_core::interact::Grab;
 use tryon_core::math::{Real, Vec3, vertex_normals};
@@ -22,24 +23,15 @@ impl Pipeline {
         let body = build::body(&scene)?;
         let moving = body.motion.is_some();
         let collides = fx.body_collision != CollisionMethod::None;
-        // The garment, placed clear of the body (judged with the cloth's thickness).
-        let mut garment = build::garment(&scene, body.makehuman.as_ref())?;
-        let placed_moved = if collides {
-            let mut placer = ExactCollider::new(&body.mesh, thickness)?;
-            garment_fit::place_outside(&mut garment, &mut placer)
-        } else {
-            0
-        };
-        // Small separate pieces of a real garment ride on the piece beneath them.
-        let attachments = if matches!(scene.garment, GarmentSection::Mhclo(_)) {
-            garment_fit::attach_small_pieces(&garment, 0.1, 0.03)
-        } else {
-            Vec::new()
-        };
+        // The garments, each placed clear of the body (judged with the cloth's thickness) and
+        // of the layers under it, joined into one cloth.
+        let dressed = crate::wardrobe::dress(&scene, &body, collides)?;
+        let (garment, placed_moved) = (dressed.mesh.clone(), dressed.placed_moved);
+        let attachments = dressed.attachments.clone();
         // The referee judges the true surface.
         let referee = ExactCollider::new(&body.mesh, 0.0)?;
         let bands = if collides {
-            bands(&scene, &garment, &body.mesh, &referee, &attachments)?
+            bands(&scene, &dressed, &body.mesh, &referee)?
         } else {
             None
         };
@@ -53,7 +45,7 @@ impl Pipeline {
                 .collect()
         });
         let kinematic: Vec<u32> = attachments.iter().map(|a| a.vertex).collect();
-        let solver = build::solver(&scene, &garment, handles, &kinematic)?;
+        let solver = build::solver(&scene, &garment, handles, &kinematic, &dressed.wear)?;
         let collider = collides
             .then(|| build::collider(fx.body_collision, &body.mesh, thickness, &fx))
             .transpose()?;
@@ -65,7 +57,10 @@ impl Pipeline {
         } else {
             None
         };
-        let surface_stages = surface_stages(&scene, &garment, &body.mesh)?;
+        let mut surface_stages = surface_stages(&scene, &garment, &body.mesh)?;
+        if let Some(stage) = fine_layers(&scene, &dressed, &body.mesh, &surface_stages)? {
+            surface_stages.push(stage);
+        }
         let grab = match &scene.garment {
             GarmentSection::Square(g) => g.grab.as_ref().map(|path| Grab {
                 path: path
@@ -101,6 +96,8 @@ impl Pipeline {
             referee,
             garment,
             placed_moved,
+            wear: dressed.wear,
+            layered: dressed.layered,
             frames,
             fps,
             grab,
@@ -109,32 +106,47 @@ impl Pipeline {
     }
 }
 
-/// Elastic bands: border loops lying on the body grip it (`[garment] band_gap`, m; default 6 mm
-/// for modelled garments, none for the patterns).
+/// Elastic bands: border loops lying on the body grip it (each garment's `band_gap`, m; default
+/// 6 mm for modelled garments, none for the patterns).
 fn bands(
     scene: &Scene,
-    garment: &PolyMesh,
+    dressed: &crate::wardrobe::Dressed,
     body: &PolyMesh,
     referee: &ExactCollider,
-    attachments: &[garment_fit::Attachment],
 ) -> Result<Option<Bands>, AssembleError> {
-    let band_gap = match &scene.garment {
-        GarmentSection::Dress(g) => g.band_gap,
-        GarmentSection::Skirt(g) => g.band_gap,
-        GarmentSection::Mhclo(g) => g.band_gap,
-        GarmentSection::Square(_) => 0.0,
-    };
-    if !(band_gap > 0.0) {
+    let garment = &dressed.mesh;
+    let loops = garment_fit::boundary_loops(garment)?;
+    let mut attached: Vec<u32> = dressed.attachments.iter().map(|a| a.vertex).collect();
+    attached.sort_unstable();
+    let mut vertices = Vec::new();
+    for worn in scene.garments() {
+        let band_gap = match worn.garment {
+            GarmentSection::Dress(g) => g.band_gap,
+            GarmentSection::Skirt(g) => g.band_gap,
+            GarmentSection::Mhclo(g) => g.band_gap,
+            GarmentSection::Square(_) => 0.0,
+        };
+        if !(band_gap > 0.0) {
+            continue;
+        }
+        let own: Vec<Vec<u32>> = loops
+            .iter()
+            .filter(|l| {
+                l.first()
+                    .is_some_and(|&v| dressed.garment_of(v) == worn.index)
+            })
+            .cloned()
+            .collect();
+        vertices.extend(garment_fit::select_bands(&own, 8, band_gap, |v| {
+            referee
+                .project(&garment.positions[v as usize])
+                .map_or(Real::INFINITY, |p| p.distance)
+        }));
+    }
+    vertices.retain(|v| attached.binary_search(v).is_err());
+    if vertices.is_empty() {
         return Ok(None);
     }
-    let loops = garment_fit::boundary_loops(garment)?;
-    let attached: Vec<u32> = attachments.iter().map(|a| a.vertex).collect();
-    let mut vertices = garment_fit::select_bands(&loops, 8, band_gap, |v| {
-        referee
-            .project(&garment.positions[v as usize])
-            .map_or(Real::INFINITY, |p| p.distance)
-    });
-    vertices.retain(|v| attached.binary_search(v).is_err());
     Ok(Bands::bind(body, &garment.positions, &vertices)?)
 }
 
@@ -176,6 +188,37 @@ fn surface_stages(
         Box::new(pn),
         Box::new(wrinkle::DetailStage::new(detail, fine_collider)),
     ])
+}
+
+/// With several garments kept apart (`cloth_collision`) on a refined surface: the fine surface's
+/// garments untangled after the other surface stages (`FineLayers`).
+fn fine_layers(
+    scene: &Scene,
+    dressed: &crate::wardrobe::Dressed,
+    body: &PolyMesh,
+    stages: &[Box<dyn SurfaceStage>],
+) -> Result<Option<Box<dyn SurfaceStage>>, AssembleError> {
+    if !(scene.effects.cloth_collision && dressed.wear.len() > 1) || stages.is_empty() {
+        return Ok(None);
+    }
+    let n = dressed.mesh.positions.len();
+    let (mut garment, mut layer) = (vec![0u16; n], vec![0u32; n]);
+    for (g, w) in dressed.wear.iter().enumerate() {
+        for v in w.particles.clone() {
+            garment[v as usize] = g as u16;
+            layer[v as usize] = w.layer;
+        }
+    }
+    let mut pn = pnt_surface::PnStage::new(
+        pnt_surface::PnRefiner::new(&dressed.mesh, scene.effects.refine)?,
+        1.0,
+    );
+    let mut surface = FineSurface::default();
+    pn.evaluate(&dressed.mesh.positions, &mut surface);
+    let orientation = outward_orientation(&dressed.mesh, body)?;
+    let gap = scene.cloth.self_thickness;
+    let stage = FineLayers::new(&surface, (&garment, &layer), gap, orientation);
+    Ok(Some(Box::new(stage)))
 }
 
 /// Which way the garment's triangles wind: -1 when their normals point into the body (judged on

@@ -13,6 +13,7 @@ use body_collide::{
 use body_model::{Mannequin, SkinnedBody};
 use cloth_dyn::self_contact::SelfParams;
 use cloth_dyn::self_contact::broad::BroadPhase;
+use cloth_dyn::wear::GarmentWear;
 use cloth_dyn::{
     BuildClothError, ClothModel, ClothParams, ClothSim, Handle, IntegratorKind, VbdParams, VbdSim,
     XpbdParams, XpbdSim, presets,
@@ -50,6 +51,8 @@ pub enum AssembleError {
     Refine(#[from] pnt_surface::RefineError),
     #[error("surface detail: {0}")]
     Detail(#[from] wrinkle::DetailError),
+    #[error("garments: {0}")]
+    Wear(#[from] cloth_dyn::wear::WearError),
 }
 
 /// The body as assembled: its rest mesh, the model, the motion (`None` for a body that holds
@@ -178,16 +181,17 @@ fn press(body: SkinnedBody, scene: &Scene) -> SkinnedBody {
     }
 }
 
-/// The scene's garment, before it is placed on the body.
-pub fn garment(
+/// One of the scene's garments, `garment`, before it is placed on the body.
+pub fn garment_of(
     scene: &Scene,
+    garment: &GarmentSection,
     makehuman: Option<&body_model::MakeHumanBody>,
 ) -> Result<PolyMesh, AssembleError> {
     let m = match &scene.body {
         BodySection::Mannequin(b) => b.measurements(),
         _ => tryon_core::measure::Measurements::default(),
     };
-    Ok(match &scene.garment {
+    Ok(match garment {
         GarmentSection::Dress(g) => {
             let p = DressParams {
                 ease: [g.ease[0], g.ease[1], g.ease[2]],
@@ -301,16 +305,27 @@ pub fn solver(
     garment: &PolyMesh,
     handles: Vec<Handle>,
     kinematic: &[u32],
+    wear: &[GarmentWear],
 ) -> Result<Box<dyn ClothSolver>, AssembleError> {
+    let model = |p: &ClothParams| -> Result<ClothModel, AssembleError> {
+        let mut m = ClothModel::build_with_kinematic(garment, p, handles.clone(), kinematic)?;
+        if !wear.is_empty() {
+            m.wear(wear)?;
+        }
+        Ok(m)
+    };
     Ok(match scene.cloth.solver {
-        SolverName::P1 => Box::new(cloth_sim(scene, garment, handles, kinematic)?),
+        SolverName::P1 => {
+            let p = cloth_params(scene, garment)?;
+            Box::new(ClothSim::new(model(&p)?, p, integrator(scene)))
+        }
         SolverName::Xpbd => {
             let mut p = cloth_params(scene, garment)?;
             // XPBD's edges are inextensible: a garment cut 5% small (P1's worn-under-tension
             // rest scale) would be torn between its edges and the body (stretch 2.0 by frame 3 on
             // makehuman-dress-walk); it is worn at its modelled size unless the scene says.
             p.rest_scale = scene.cloth.rest_scale.unwrap_or(1.0);
-            let model = ClothModel::build_with_kinematic(garment, &p, handles, kinematic)?;
+            let model = model(&p)?;
             let c = &scene.cloth;
             let x = XpbdParams {
                 substep: c.xpbd_substep,
@@ -324,8 +339,11 @@ pub fn solver(
         SolverName::Vbd => {
             let mut p = cloth_params(scene, garment)?;
             p.rest_scale = scene.cloth.rest_scale.unwrap_or(1.0);
-            let model = ClothModel::build_with_kinematic(garment, &p, handles, kinematic)?;
+            let model = model(&p)?;
             let c = &scene.cloth;
+            let fx = &scene.effects;
+            let several = wear.len() > 1;
+            let contact = fx.self_collision || (fx.cloth_collision && several);
             let v = VbdParams {
                 substep: c.vbd_substep,
                 iterations: c.vbd_iterations,
@@ -337,13 +355,15 @@ pub fn solver(
                 pokes: c.vbd_pokes,
                 limit: c.vbd_limit,
                 limit_passes: c.vbd_limit_passes,
-                self_contact: scene.effects.self_collision.then(|| SelfParams {
+                self_contact: contact.then(|| SelfParams {
                     thickness: c.self_thickness,
-                    friction: scene.effects.friction,
+                    friction: fx.friction,
                     broad: match c.self_broad_phase {
                         BroadPhaseName::Tree => BroadPhase::Tree,
                         BroadPhaseName::Hash => BroadPhase::Hash,
                     },
+                    within: fx.self_collision,
+                    between: fx.cloth_collision,
                     ..SelfParams::default()
                 }),
                 ..VbdParams::default()
@@ -362,13 +382,17 @@ pub fn cloth_sim(
     kinematic: &[u32],
 ) -> Result<ClothSim, AssembleError> {
     let p = cloth_params(scene, garment)?;
-    let kind = match scene.cloth.integrator {
+    let model = ClothModel::build_with_kinematic(garment, &p, handles, kinematic)?;
+    Ok(ClothSim::new(model, p, integrator(scene)))
+}
+
+/// The scene's integrator for P1's solver.
+fn integrator(scene: &Scene) -> IntegratorKind {
+    match scene.cloth.integrator {
         IntegratorName::Rk4 => IntegratorKind::Rk4,
         IntegratorName::SymplecticEuler => IntegratorKind::SymplecticEuler,
         IntegratorName::ImplicitEuler => IntegratorKind::ImplicitEuler,
-    };
-    let model = ClothModel::build_with_kinematic(garment, &p, handles, kinematic)?;
-    Ok(ClothSim::new(model, p, kind))
+    }
 }
 
 /// The collider `method` over `body`, keeping `thickness` from it. Adding a collider is one arm

@@ -4,7 +4,7 @@
 //! ([`RunOutput`], [`Stats`]), exports, and the drape fixture (a scene on the same loop) used by
 //! tests and benchmarks.
 //!
-//! Modules depend in one direction: scene <- real <- build <- assemble -> pipeline <- run,
+//! Modules depend in one direction: scene <- real <- build <- wardrobe <- assemble -> pipeline <- run,
 //! export, drape; timers and metrics are leaves.
 
 pub mod assemble;
@@ -18,6 +18,7 @@ pub mod real;
 pub mod run;
 pub mod scene;
 pub mod timers;
+pub mod wardrobe;
 
 pub use assemble::AssembleError;
 pub use drape::{DrapeConfig, DrapeError, DrapeReport, DrapeScene, FrameTrace};

@@ -56,6 +56,10 @@ pub struct Pipeline {
     pub garment: PolyMesh,
     /// Garment vertices moved out of the body when placing it.
     pub placed_moved: usize,
+    /// Each garment's vertices in `garment`, layer and material (one entry per garment).
+    pub wear: Vec<cloth_dyn::wear::GarmentWear>,
+    /// What wearing each garment over the lower layers moved (one per garment).
+    pub layered: Vec<garment_fit::LayerPlacement>,
     pub frames: usize,
     pub fps: Real,
     /// A grab still to happen (`[garment] grab`).

@@ -83,6 +83,28 @@ pub struct Metrics {
     /// Smallest gap between layers of cloth over all frames: a vertex's distance to a triangle
     /// not around it, along that triangle's normal (m; 0.01 when no layers came nearer).
     pub cloth_min_gap_m: Real,
+    /// Garments worn (`[[garment]]`).
+    pub garments: usize,
+    /// Garment vertices moved out over the layers beneath when dressing, and the farthest move (m).
+    pub layer_placement_moved: usize,
+    pub layer_placement_farthest_m: Real,
+    /// With contact between layers of cloth: what pulling apart the layers that crossed or
+    /// touched in the starting shape did before the first step.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub untangle: Option<UntangleStats>,
+}
+
+/// What untangling the starting shape did (`tryon_core::stages::Untangled`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct UntangleStats {
+    /// Crossing triangle pairs before and after.
+    pub crossings_before: usize,
+    pub crossings_after: usize,
+    /// Pairs still nearer than nine tenths of the thickness after (left out as never apart).
+    pub near_after: usize,
+    /// Vertices moved, and the farthest move (m).
+    pub moved: usize,
+    pub farthest_m: Real,
 }
 
 /// Per-frame figures (for plots and regressions).
@@ -233,6 +255,10 @@ impl Pipeline {
             ..Stats::default()
         };
         stats.metrics.placement_moved = self.placed_moved;
+        stats.metrics.garments = self.wear.len().max(1);
+        stats.metrics.layer_placement_moved = self.layered.iter().map(|l| l.moved).sum();
+        stats.metrics.layer_placement_farthest_m =
+            self.layered.iter().map(|l| l.farthest).fold(0.0, Real::max);
         let mut timers = Timers::default();
         sink.begin(&RunHeader {
             name: &self.scene.scene.name,
@@ -360,6 +386,13 @@ impl Pipeline {
         if refines {
             stats.metrics.length_error = Some(length_sum / length_frames.max(1) as Real);
         }
+        stats.metrics.untangle = self.solver.untangled().map(|u| UntangleStats {
+            crossings_before: u.crossings_before,
+            crossings_after: u.crossings_after,
+            near_after: u.near_after,
+            moved: u.moved,
+            farthest_m: u.farthest,
+        });
         stats.stages = timers.finish();
         RunSummary {
             garment_triangles,

@@ -15,7 +15,7 @@ mod sections;
 pub use schema::{
     ArmRaiseSpec, BodySection, BvhSpec, DressSpec, GarmentSection, IntegratorName, MakeHumanSpec,
     MannequinBody, MaterialName, MhcloSpec, MotionSection, ObjectBody, RigName, SceneSection,
-    SkirtSpec, SphereBody, SquareSpec, StillSpec, WalkSpec,
+    SkirtSpec, SphereBody, SquareSpec, StillSpec, WalkSpec, WearSpec,
 };
 pub use sections::{
     BroadPhaseName, ClothSection, CollisionMethod, EffectsSection, OutputSection, SolverName,
@@ -55,8 +55,16 @@ pub struct Scene {
     pub scene: SceneSection,
     /// The body; required.
     pub body: BodySection,
-    /// The garment; required.
+    /// The garment; required. With several (`[[garment]]`), the first listed.
     pub garment: GarmentSection,
+    /// The garments listed after the first (`[[garment]]`), in order.
+    #[serde(skip)]
+    #[schemars(skip)]
+    pub more_garments: Vec<GarmentSection>,
+    /// How each garment is worn (layer, material), one per garment, the first's first.
+    #[serde(skip)]
+    #[schemars(skip)]
+    pub wear: Vec<WearSpec>,
     /// The motion; the body holds still when absent.
     pub motion: MotionSection,
     /// Material and solver settings.
@@ -84,14 +92,30 @@ pub(crate) fn line_col(text: &str, offset: usize) -> (usize, usize) {
 
 /// Line of `key` inside `[table]` (or of the table header when the key is absent).
 pub fn line_of(text: &str, table: &str, key: &str) -> Option<usize> {
+    line_of_nth(text, table, 0, key)
+}
+
+/// Line of `key` inside the `nth` (from 0) `[[table]]` of an array of tables, or inside
+/// `[table]` (`nth` = 0); the table header's line when the key is absent.
+pub fn line_of_nth(text: &str, table: &str, nth: usize, key: &str) -> Option<usize> {
     let mut current = String::new();
     let mut header = None;
+    let mut seen = 0;
     for (i, raw) in text.lines().enumerate() {
         let l = raw.trim();
         if let Some(name) = l.strip_prefix('[').and_then(|s| s.strip_suffix(']')) {
-            current = name.trim().to_string();
+            let name = name.trim();
+            let array = name.strip_prefix('[').and_then(|s| s.strip_suffix(']'));
+            current = array.unwrap_or(name).trim().to_string();
             if current == table {
-                header = Some(i + 1);
+                if array.is_some() {
+                    seen += 1;
+                }
+                if seen.max(1) - 1 == nth && header.is_none() {
+                    header = Some(i + 1);
+                } else {
+                    current.clear();
+                }
             }
             continue;
         }
@@ -105,7 +129,37 @@ pub fn line_of(text: &str, table: &str, key: &str) -> Option<usize> {
     header
 }
 
+/// One garment of a scene and how it is worn.
+#[derive(Clone, Copy, Debug)]
+pub struct Worn<'a> {
+    /// Its place in the scene's list of garments.
+    pub index: usize,
+    pub garment: &'a GarmentSection,
+    pub wear: &'a WearSpec,
+    /// Its layer: `wear.layer`, else its index.
+    pub layer: u32,
+}
+
 impl Scene {
+    /// Every garment in the order listed, with how it is worn.
+    pub fn garments(&self) -> Vec<Worn<'_>> {
+        static PLAIN: std::sync::OnceLock<WearSpec> = std::sync::OnceLock::new();
+        let plain = PLAIN.get_or_init(WearSpec::default);
+        std::iter::once(&self.garment)
+            .chain(&self.more_garments)
+            .enumerate()
+            .map(|(index, garment)| {
+                let wear = self.wear.get(index).unwrap_or(plain);
+                Worn {
+                    index,
+                    garment,
+                    wear,
+                    layer: wear.layer.unwrap_or(index as u32),
+                }
+            })
+            .collect()
+    }
+
     /// Parses and checks a scene; `file` names it in errors.
     pub fn parse(text: &str, file: &Path) -> Result<Scene, SceneError> {
         let scene = read::scene(text, file)?;

@@ -24,6 +24,68 @@ fn bad(
     }
 }
 
+/// Every key `keys` holds that `which` takes, against its range in `v` (a scene as TOML), errors
+/// naming the `nth` `[[garment]]`'s line for garment keys.
+fn within_ranges(
+    keys: &[docs::Key],
+    v: &toml::Value,
+    which: impl Fn(&docs::Key) -> bool,
+    (text, file, nth): (&str, &Path, usize),
+) -> Result<(), SceneError> {
+    for k in keys.iter().filter(|k| which(k)) {
+        let Some(table) = v.get(k.table.as_str()) else {
+            continue;
+        };
+        let holder = match &k.kind {
+            Some(kind) => table.get(kind.as_str()),
+            None => Some(table),
+        };
+        let Some(value) = holder.and_then(|h| h.get(k.name.as_str())) else {
+            continue;
+        };
+        let ok = match value {
+            toml::Value::Array(items) => {
+                k.len.is_none_or(|n| items.len() == n)
+                    && (!k.per_item
+                        || items
+                            .iter()
+                            .all(|x| number(x).is_some_and(|x| within(k, x))))
+            }
+            v => number(v).is_none_or(|x| within(k, x)),
+        };
+        if !ok {
+            let shown = match value {
+                toml::Value::Array(_) => value.to_string(),
+                v => number(v).map_or(v.to_string(), |x| x.to_string()),
+            };
+            let expected = if k.len.is_some() {
+                k.allowed()
+            } else if k.min.is_none() && k.max.is_none() {
+                // Its own rule (checked after) says more; a non-finite value fails here first.
+                "a finite number".to_string()
+            } else {
+                format!("a number in {}", k.allowed())
+            };
+            return Err(SceneError::Invalid {
+                file: file.to_path_buf(),
+                line: line_of_nth(text, &k.table, nth, &k.name),
+                key: match nth {
+                    0 => format!("{}.{}", k.table, k.name),
+                    n => format!("{}[{n}].{}", k.table, k.name),
+                },
+                value: shown,
+                expected,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Every key but the garments' wear keys (read per garment).
+fn true_key(k: &docs::Key) -> bool {
+    !(k.table == "garment" && k.kind.is_none())
+}
+
 /// Whether `x` lies in the key's range.
 fn within(k: &docs::Key, x: f64) -> bool {
     x.is_finite() && k.min.is_none_or(|a| x >= a) && k.max.is_none_or(|b| x <= b)
@@ -40,48 +102,28 @@ impl Scene {
         self.check_combinations(text, file)
     }
 
-    /// Every key against the range and length its schema gives.
+    /// Every key against the range and length its schema gives, every garment's too.
     fn check_ranges(&self, text: &str, file: &Path) -> Result<(), SceneError> {
-        let v = toml::Value::try_from(self).map_err(|e| SceneError::Syntax {
+        let syntax = |e: toml::ser::Error| SceneError::Syntax {
             file: file.to_path_buf(),
             line: 0,
             column: 0,
             message: e.to_string(),
-        })?;
-        for k in docs::keys() {
-            let table = &v[k.table.as_str()];
-            let holder = match &k.kind {
-                Some(kind) => table.get(kind.as_str()),
-                None => Some(table),
-            };
-            let Some(value) = holder.and_then(|h| h.get(k.name.as_str())) else {
-                continue;
-            };
-            let ok = match value {
-                toml::Value::Array(items) => {
-                    k.len.is_none_or(|n| items.len() == n)
-                        && (!k.per_item
-                            || items
-                                .iter()
-                                .all(|x| number(x).is_some_and(|x| within(&k, x))))
-                }
-                v => number(v).is_none_or(|x| within(&k, x)),
-            };
-            if !ok {
-                let shown = match value {
-                    toml::Value::Array(_) => value.to_string(),
-                    v => number(v).map_or(v.to_string(), |x| x.to_string()),
-                };
-                let expected = if k.len.is_some() {
-                    k.allowed()
-                } else if k.min.is_none() && k.max.is_none() {
-                    // Its own rule (checked after) says more; a non-finite value fails here first.
-                    "a finite number".to_string()
-                } else {
-                    format!("a number in {}", k.allowed())
-                };
-                return Err(bad(text, file, &k.table, &k.name, shown, &expected));
-            }
+        };
+        let v = toml::Value::try_from(self).map_err(syntax)?;
+        let keys = docs::keys();
+        within_ranges(&keys, &v, true_key, (text, file, 0))?;
+        for (n, g) in self.more_garments.iter().enumerate() {
+            let mut t = toml::Table::new();
+            t.insert("garment".into(), toml::Value::try_from(g).map_err(syntax)?);
+            let garment = |k: &docs::Key| k.table == "garment" && k.kind.is_some();
+            within_ranges(&keys, &toml::Value::Table(t), garment, (text, file, n + 1))?;
+        }
+        for (n, w) in self.wear.iter().enumerate() {
+            let mut t = toml::Table::new();
+            t.insert("garment".into(), toml::Value::try_from(w).map_err(syntax)?);
+            let wear = |k: &docs::Key| k.table == "garment" && k.kind.is_none();
+            within_ranges(&keys, &toml::Value::Table(t), wear, (text, file, n))?;
         }
         Ok(())
     }
@@ -110,6 +152,17 @@ impl Scene {
                         &e.to_string(),
                     ));
                 }
+            }
+        }
+        for (n, g) in self.more_garments.iter().enumerate() {
+            if let GarmentSection::Square(SquareSpec { grab: Some(_), .. }) = g {
+                return Err(SceneError::Invalid {
+                    file: file.to_path_buf(),
+                    line: line_of_nth(text, "garment", n + 1, "grab"),
+                    key: format!("garment[{}].grab", n + 1),
+                    value: "a path".into(),
+                    expected: "no grab: only the first garment is grabbed".into(),
+                });
             }
         }
         if let GarmentSection::Square(g) = &self.garment
@@ -197,62 +250,83 @@ impl Scene {
 
     /// What one table's kind asks of the others.
     fn check_combinations(&self, text: &str, file: &Path) -> Result<(), SceneError> {
+        let (sc, cc) = (self.effects.self_collision, self.effects.cloth_collision);
+        for (on, key) in [(sc, "self_collision"), (cc, "cloth_collision")] {
+            if on && self.cloth.solver != SolverName::Vbd {
+                let expected = "false, or cloth.solver = \"vbd\" (only the vbd solver has contact between layers of cloth)";
+                return Err(bad(text, file, "effects", key, "true".into(), expected));
+            }
+        }
+        for worn in self.garments() {
+            self.check_garment(worn.garment, worn.index, text, file)?;
+        }
         let kind = |v: &dyn erased::Kind| v.kind().to_string();
-        let (body, garment, motion) = (kind(&self.body), kind(&self.garment), kind(&self.motion));
-        let wrong = |table: &str, value: &str, expected: &str| {
-            Err(bad(
+        let (body, motion) = (kind(&self.body), kind(&self.motion));
+        match body.as_str() {
+            "object" | "sphere" if motion != "still" => Err(bad(
                 text,
                 file,
-                table,
+                "motion",
                 "kind",
-                format!("\"{value}\""),
-                expected,
-            ))
+                format!("\"{motion}\""),
+                &format!("\"still\" for {body} body (it has no skeleton)"),
+            )),
+            "makehuman" if matches!(motion.as_str(), "walk" | "arm_raise") => Err(bad(
+                text,
+                file,
+                "motion",
+                "kind",
+                format!("\"{motion}\""),
+                "\"still\" or \"bvh\" on a MakeHuman body (the built-in clips drive the mannequin's joints)",
+            )),
+            _ => Ok(()),
+        }
+    }
+
+    /// What garment `nth`'s kind asks of the body and the material.
+    fn check_garment(
+        &self,
+        g: &GarmentSection,
+        nth: usize,
+        text: &str,
+        file: &Path,
+    ) -> Result<(), SceneError> {
+        let garment = erased::Kind::kind(g);
+        let body = erased::Kind::kind(&self.body);
+        let wrong = |table: &str, key: &str, value: String, expected: &str| {
+            Err(SceneError::Invalid {
+                file: file.to_path_buf(),
+                line: line_of_nth(text, table, if table == "garment" { nth } else { 0 }, key),
+                key: match (table, nth) {
+                    ("garment", n) if n > 0 => format!("garment[{n}].{key}"),
+                    _ => format!("{table}.{key}"),
+                },
+                value,
+                expected: expected.to_string(),
+            })
         };
+        let quoted = format!("\"{garment}\"");
         if self.cloth.material == MaterialName::Sheet && garment != "square" {
             let expected = "\"garment\": the sheet material assumes a flat rest shape (garment kind = \"square\")";
-            return Err(bad(
-                text,
-                file,
-                "cloth",
-                "material",
-                "\"sheet\"".into(),
-                expected,
-            ));
+            return wrong("cloth", "material", "\"sheet\"".into(), expected);
         }
-        if self.effects.self_collision && self.cloth.solver != SolverName::Vbd {
-            let expected = "false, or cloth.solver = \"vbd\" (only the vbd solver has the cloth's contact with itself)";
-            return Err(bad(
-                text,
-                file,
-                "effects",
-                "self_collision",
-                "true".into(),
-                expected,
-            ));
-        }
-        match body.as_str() {
-            "object" | "sphere" if motion != "still" => wrong(
-                "motion",
-                &motion,
-                &format!("\"still\" for {body} body (it has no skeleton)"),
-            ),
-            "object" | "sphere" if garment != "square" => {
-                wrong("garment", &garment, &format!("\"square\" on {body} body"))
-            }
-            "makehuman" if matches!(garment.as_str(), "dress" | "skirt") => wrong(
+        match body {
+            "object" | "sphere" if garment != "square" => wrong(
                 "garment",
-                &garment,
-                "\"mhclo\" or \"square\" on a MakeHuman body (patterns are cut for the mannequin)",
+                "kind",
+                quoted,
+                &format!("\"square\" on {body} body"),
             ),
-            "makehuman" if matches!(motion.as_str(), "walk" | "arm_raise") => wrong(
-                "motion",
-                &motion,
-                "\"still\" or \"bvh\" on a MakeHuman body (the built-in clips drive the mannequin's joints)",
+            "makehuman" if matches!(garment, "dress" | "skirt") => wrong(
+                "garment",
+                "kind",
+                quoted,
+                "\"mhclo\" or \"square\" on a MakeHuman body (patterns are cut for the mannequin)",
             ),
             b if b != "makehuman" && garment == "mhclo" => wrong(
                 "garment",
-                &garment,
+                "kind",
+                quoted,
                 "a MakeHuman body ([body] kind = \"makehuman\") to bind the garment to",
             ),
             _ => Ok(()),

@@ -194,6 +194,10 @@ pub fn keys() -> Vec<Key> {
         "scene", "body", "garment", "motion", "cloth", "effects", "output",
     ] {
         let t = resolve(&r["properties"][table], defs);
+        if table == "garment" {
+            let w = schemars::schema_for!(super::WearSpec).as_value().clone();
+            out.extend(keys_of(table, None, &w, &w["$defs"]));
+        }
         match t["oneOf"].as_array() {
             Some(kinds) => {
                 for k in kinds {
@@ -230,7 +234,8 @@ pub fn markdown() -> String {
         "# Scene files: every key\n\n\
          Generated from the schema by `cargo xtask docs` (do not edit; `cargo xtask tidy` checks it).\n\
          A scene is TOML with the tables below; `[body]` and `[garment]` are required. A table with\n\
-         kinds takes `kind = \"...\"` and only that kind's keys. Unknown keys and values outside the\n\
+         kinds takes `kind = \"...\"` and only that kind's keys. Several garments are worn as\n\
+         `[[garment]]` tables, each with its kind, its kind's keys and the keys every kind takes. Unknown keys and values outside the\n\
          allowed range are errors naming the file, line and key. Any key can be set on the command\n\
          line with `--set table.key=value`.\n",
     );

@@ -3,6 +3,7 @@
 //! `kind` is read as the variant the kind names, which owns its keys.
 
 use super::{Scene, SceneError, line_col};
+use serde::Deserialize;
 use serde::de::DeserializeOwned;
 use std::path::Path;
 use toml::Spanned;
@@ -137,6 +138,68 @@ fn tagged<T: DeserializeOwned + schemars::JsonSchema>(
         .map_err(|e| located(e, text, file, name))
 }
 
+/// One garment's table: its wear keys (`WearSpec`) taken out and read, the rest read as the kind
+/// it names.
+fn worn(
+    text: &str,
+    file: &Path,
+    value: Spanned<DeValue<'_>>,
+) -> Result<(super::GarmentSection, super::WearSpec), SceneError> {
+    let (span, mut table) = table_of(text, file, "garment", value)?;
+    let mut wear = DeTable::default();
+    let keys: Vec<_> = table
+        .keys()
+        .filter(|k| super::WearSpec::KEYS.contains(&k.get_ref().as_ref()))
+        .cloned()
+        .collect();
+    for k in keys {
+        if let Some(v) = table.remove(&k) {
+            wear.insert(k, v);
+        }
+    }
+    let spec = super::WearSpec::deserialize(Deserializer::from(Spanned::new(span.clone(), wear)))
+        .map_err(|e| located(e, text, file, "garment"))?;
+    let garment = tagged(
+        text,
+        file,
+        "garment",
+        Spanned::new(span, DeValue::Table(table)),
+    )?;
+    Ok((garment, spec))
+}
+
+/// The garments of `[garment]` (one) or `[[garment]]` (one or more), in order.
+fn garments(
+    text: &str,
+    file: &Path,
+    value: Spanned<DeValue<'_>>,
+) -> Result<Vec<(super::GarmentSection, super::WearSpec)>, SceneError> {
+    let span = value.span();
+    match value.into_inner() {
+        DeValue::Array(items) if items.is_empty() => Err(invalid(
+            text,
+            file,
+            span.start,
+            "garment",
+            "an empty list".into(),
+            "one or more [[garment]] tables".into(),
+        )),
+        DeValue::Array(items) if items.len() > MAX_GARMENTS => Err(invalid(
+            text,
+            file,
+            span.start,
+            "garment",
+            format!("{} garments", items.len()),
+            format!("at most {MAX_GARMENTS} [[garment]] tables"),
+        )),
+        DeValue::Array(items) => items.into_iter().map(|v| worn(text, file, v)).collect(),
+        other => Ok(vec![worn(text, file, Spanned::new(span, other))?]),
+    }
+}
+
+/// Most garments one scene wears.
+pub const MAX_GARMENTS: usize = 8;
+
 /// Reads a scene (not yet checked).
 pub(super) fn scene(text: &str, file: &Path) -> Result<Scene, SceneError> {
     let doc = DeTable::parse(text).map_err(|e| located(e, text, file, ""))?;
@@ -144,6 +207,8 @@ pub(super) fn scene(text: &str, file: &Path) -> Result<Scene, SceneError> {
         scene: Default::default(),
         body: super::BodySection::Sphere(Default::default()),
         garment: super::GarmentSection::Square(Default::default()),
+        more_garments: Vec::new(),
+        wear: Vec::new(),
         motion: Default::default(),
         cloth: Default::default(),
         effects: Default::default(),
@@ -156,7 +221,15 @@ pub(super) fn scene(text: &str, file: &Path) -> Result<Scene, SceneError> {
         match name.as_ref() {
             "scene" => s.scene = plain(text, file, "scene", value)?,
             "body" => (s.body, body) = (tagged(text, file, "body", value)?, true),
-            "garment" => (s.garment, garment) = (tagged(text, file, "garment", value)?, true),
+            "garment" => {
+                let (worn, wear): (Vec<_>, Vec<_>) =
+                    garments(text, file, value)?.into_iter().unzip();
+                let mut worn = worn.into_iter();
+                if let Some(first) = worn.next() {
+                    (s.garment, garment) = (first, true);
+                }
+                (s.more_garments, s.wear) = (worn.collect(), wear);
+            }
             "motion" => s.motion = tagged(text, file, "motion", value)?,
             "cloth" => s.cloth = plain(text, file, "cloth", value)?,
             "effects" => s.effects = plain(text, file, "effects", value)?,

@@ -231,6 +231,40 @@ pub enum GarmentSection {
     Mhclo(MhcloSpec),
 }
 
+/// How one garment is worn among several (`[[garment]]`): its layer and its own material. Every
+/// kind of garment takes these keys.
+#[derive(Clone, Debug, Deserialize, Serialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct WearSpec {
+    /// Layer order, the body's skin being below 0: a garment of a higher layer is worn over one
+    /// of a lower (placed outside it, and pulled out where they cross at the start); absent, the
+    /// order the garments are listed in.
+    #[schemars(range(min = 0, max = 15))]
+    pub layer: Option<u32>,
+    /// This garment's areal density (kg/m^2); absent, `cloth.density`.
+    #[schemars(range(min = 0.001, max = 10.0))]
+    pub density: Option<Real>,
+    /// This garment's stiffness (its stretch, shear and flexion springs) as a multiple of the
+    /// cloth's.
+    #[schemars(range(min = 0.01, max = 100.0))]
+    pub stiffness: Real,
+}
+
+impl Default for WearSpec {
+    fn default() -> Self {
+        WearSpec {
+            layer: None,
+            density: None,
+            stiffness: 1.0,
+        }
+    }
+}
+
+impl WearSpec {
+    /// The keys every garment kind takes.
+    pub const KEYS: [&'static str; 3] = ["layer", "density", "stiffness"];
+}
+
 /// A dress pattern; garment-fit's defaults.
 #[derive(Clone, Debug, Deserialize, Serialize, JsonSchema, PartialEq)]
 #[serde(deny_unknown_fields, default)]

@@ -247,6 +247,9 @@ pub struct EffectsSection {
     /// `cloth.self_thickness` apart and never pass through each other where they were apart in
     /// the modelled shape; friction between layers is `friction`.
     pub self_collision: bool,
+    /// Contact between garments (the `vbd` solver), with several `[[garment]]`: each keeps
+    /// `cloth.self_thickness` from the others, the outer never passing through the inner.
+    pub cloth_collision: bool,
     /// Velocity damping (1/s); 0 turns it off.
     #[schemars(range(min = 0.0, max = 100.0))]
     pub velocity_damping: Real,
@@ -295,6 +298,7 @@ impl Default for EffectsSection {
             follow_body: true,
             body_press: true,
             self_collision: false,
+            cloth_collision: false,
             velocity_damping: env.velocity_damping,
             refine: 0,
             // The surface stages a refined scene gets unless it says otherwise: fine collision

@@ -271,3 +271,112 @@ fn self_collision_asks_for_the_vbd_solver_and_a_thickness_in_range() {
     let s = Scene::parse(&ok, Path::new("m.toml")).unwrap();
     assert!(s.effects.self_collision && s.cloth.self_thickness == 0.003);
 }
+
+/// A mannequin scene wearing `garments` (the text of each `[[garment]]` table).
+fn wearing(garments: &[&str], effects: &str) -> String {
+    let mut s = String::from("[body]\nkind = \"mannequin\"\n");
+    for g in garments {
+        s.push_str(&format!("[[garment]]\n{g}"));
+    }
+    s.push_str(&format!("[cloth]\nsolver = \"vbd\"\n[effects]\n{effects}"));
+    s
+}
+
+#[test]
+fn several_garments_are_read_in_order_with_their_layers_and_materials() {
+    let text = wearing(
+        &[
+            "kind = \"skirt\"\ndensity = 0.1\nstiffness = 0.5\n",
+            "kind = \"dress\"\nlayer = 3\n",
+            "kind = \"skirt\"\n",
+        ],
+        "cloth_collision = true\n",
+    );
+    let s = Scene::parse(&text, Path::new("m.toml")).unwrap_or_else(|e| panic!("{e}"));
+    let worn = s.garments();
+    let kinds: Vec<_> = worn
+        .iter()
+        .map(|w| matches!(w.garment, GarmentSection::Dress(_)))
+        .collect();
+    assert_eq!(kinds, [false, true, false]);
+    // Layers: the given one, else the place in the list.
+    let layers: Vec<u32> = worn.iter().map(|w| w.layer).collect();
+    assert_eq!(layers, [0, 3, 2]);
+    assert_eq!(worn[0].wear.density, Some(0.1));
+    assert_eq!(worn[0].wear.stiffness, 0.5);
+    assert_eq!(worn[1].wear.density, None);
+    assert_eq!(worn[2].wear.stiffness, 1.0);
+    // One `[garment]` table is one garment, as it always was.
+    let one = Scene::parse(&minimal("garment", Some("dress"), ""), Path::new("m.toml")).unwrap();
+    assert_eq!(one.garments().len(), 1);
+    assert_eq!(one.garments()[0].layer, 0);
+}
+
+#[test]
+fn a_bad_value_of_a_later_garment_names_that_garment_and_its_line() {
+    let text = wearing(
+        &[
+            "kind = \"skirt\"\n",
+            "kind = \"dress\"\nstiffness = 500.0\n",
+        ],
+        "",
+    );
+    let e = Scene::parse(&text, Path::new("m.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("garment[1].stiffness") && e.contains("m.toml:7"),
+        "{e}"
+    );
+    let text = wearing(
+        &["kind = \"skirt\"\n", "kind = \"dress\"\nflare = 9.0\n"],
+        "",
+    );
+    let e = Scene::parse(&text, Path::new("m.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("garment[1].flare") && e.contains("m.toml:7"),
+        "{e}"
+    );
+    // A MakeHuman garment on the mannequin, second in the list.
+    let text = wearing(
+        &[
+            "kind = \"skirt\"\n",
+            "kind = \"mhclo\"\nfile = \"x.mhclo\"\n",
+        ],
+        "",
+    );
+    let e = Scene::parse(&text, Path::new("m.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("garment[1].kind") && e.contains("MakeHuman body"),
+        "{e}"
+    );
+}
+
+#[test]
+fn garment_lists_and_contact_between_garments_are_checked() {
+    let e = Scene::parse(
+        "garment = []\n[body]\nkind = \"mannequin\"\n",
+        Path::new("m.toml"),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("garment") && e.contains("one or more"), "{e}");
+    let nine = vec!["kind = \"skirt\"\n"; 9];
+    let e = Scene::parse(&wearing(&nine, ""), Path::new("m.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("at most 8"), "{e}");
+    let text = wearing(&["kind = \"skirt\"\n"], "cloth_collision = true\n")
+        .replace("solver = \"vbd\"", "solver = \"p1\"");
+    let e = Scene::parse(&text, Path::new("m.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("effects.cloth_collision") && e.contains("vbd"),
+        "{e}"
+    );
+}

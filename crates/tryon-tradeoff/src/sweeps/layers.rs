@@ -1,5 +1,6 @@
-//! (h) What the cloth's contact with itself costs and buys on every scene: VBD with
-//! `[effects] self_collision` off and on (each scene's own settings otherwise).
+//! (h) What the cloth's contact with itself and between garments costs and buys on every scene:
+//! VBD with `[effects] self_collision` and `cloth_collision` both off and both on (each scene's
+//! own settings otherwise; `cloth_collision` does nothing with one garment).
 
 use super::*;
 
@@ -15,12 +16,14 @@ pub(super) struct LayerPoint {
 }
 
 /// The scenes compared, with the frames of a quick run (`None`: the scene's own length).
-const SCENES: [(&str, Option<usize>); 5] = [
+const SCENES: [(&str, Option<usize>); 7] = [
     ("drape-sphere.toml", Some(30)),
     ("demo-dress-walk.toml", Some(12)),
     ("skirt-walk.toml", Some(12)),
+    ("layered-walk.toml", Some(12)),
     ("makehuman-dress-walk.toml", Some(4)),
     ("makehuman-casual-131.toml", Some(4)),
+    ("makehuman-layered-131.toml", Some(4)),
 ];
 
 /// Points a complete sweep makes.
@@ -33,6 +36,7 @@ pub(super) fn layer_sweep(quick: bool, log: &mut String) -> Result<Vec<LayerPoin
             let sets = vec![
                 "cloth.solver=\"vbd\"".to_string(),
                 format!("effects.self_collision={on}"),
+                format!("effects.cloth_collision={on}"),
             ];
             let frames = if quick { quick_frames } else { None };
             let (s, _) = run_scene(file, &sets, frames)?;
@@ -66,7 +70,7 @@ pub(super) fn section(r: &mut String, points: &[LayerPoint]) {
     let _ = writeln!(r, "\n## (h) The cloth against itself\n");
     let _ = writeln!(
         r,
-        "`[effects] self_collision` under VBD, off and on: the most crossing pairs of garment triangles in a frame (the referee, `tryon-pipeline/src/crossings.rs`), penetration into the body, stretch, and the cloth step's cost.\n"
+        "`[effects] self_collision` and `cloth_collision` under VBD, both off and both on (two garments in the layered scenes): the most crossing pairs of garment triangles in a frame (the referee, `tryon-pipeline/src/crossings.rs`), penetration into the body, stretch, and the cloth step's cost.\n"
     );
     let _ = writeln!(
         r,

@@ -1,0 +1,171 @@
+//! The scene's garments as one cloth: each built and placed clear of the body, each worn over
+//! those of lower layers (`garment_fit::place_over`), then joined into one mesh whose vertex
+//! ranges say which garment is which. Contact between them is then the cloth's contact with
+//! itself, inside the one solve.
+
+use crate::build::{self, AssembleError, BuiltBody};
+use crate::scene::{GarmentSection, Scene};
+use body_collide::ExactCollider;
+use cloth_dyn::wear::GarmentWear;
+use garment_fit::{Attachment, LayerPlacement};
+use std::ops::Range;
+use tryon_core::math::Real;
+use tryon_core::mesh::{Face, PolyMesh};
+
+/// Farthest along the body's normal an inner garment's point counts as under an outer vertex
+/// (m): layers are millimetres to centimetres apart; beyond this, a point is another part of the
+/// body's garment (the other side of a sleeve).
+const LAYER_DEPTH: Real = 0.04;
+
+/// The gap placement leaves between layers, in the cloth's self-contact thickness: a little more
+/// than it, so the layers start apart.
+const LAYER_GAP: Real = 1.5;
+
+/// The garments as one cloth.
+#[derive(Clone, Debug)]
+pub struct Dressed {
+    /// All garments' vertices and faces, garment after garment in the order listed.
+    pub mesh: PolyMesh,
+    /// Each garment's vertices in `mesh`, with its layer and material.
+    pub wear: Vec<GarmentWear>,
+    /// Vertices moved out of the body when placed.
+    pub placed_moved: usize,
+    /// What wearing each garment over the lower layers moved (one per garment).
+    pub layered: Vec<LayerPlacement>,
+    /// Small separate pieces of the real garments riding on the piece beneath them (in `mesh`'s
+    /// numbering).
+    pub attachments: Vec<Attachment>,
+}
+
+impl Dressed {
+    /// The garment vertex `v` belongs to.
+    pub fn garment_of(&self, v: u32) -> usize {
+        self.wear
+            .iter()
+            .position(|w| w.particles.contains(&v))
+            .unwrap_or(0)
+    }
+}
+
+/// `mesh`'s faces with every index moved up by `base`.
+fn shifted(mesh: &PolyMesh, base: u32) -> impl Iterator<Item = Face> + '_ {
+    mesh.faces.iter().map(move |f| match f {
+        Face::Tri(t) => Face::Tri(t.map(|v| v + base)),
+        Face::Quad(q) => Face::Quad(q.map(|v| v + base)),
+    })
+}
+
+/// Meshes joined into one, in order.
+fn join<'a>(meshes: impl IntoIterator<Item = &'a PolyMesh>) -> PolyMesh {
+    let mut out = PolyMesh::default();
+    for m in meshes {
+        let base = out.positions.len() as u32;
+        out.positions.extend_from_slice(&m.positions);
+        out.faces.extend(shifted(m, base));
+    }
+    out
+}
+
+/// Builds, places and joins the scene's garments on `body`; `collides` says whether the body is
+/// collided with (placement needs it).
+pub(crate) fn dress(
+    scene: &Scene,
+    body: &BuiltBody,
+    collides: bool,
+) -> Result<Dressed, AssembleError> {
+    let worn = scene.garments();
+    let mut meshes = worn
+        .iter()
+        .map(|w| build::garment_of(scene, w.garment, body.makehuman.as_ref()))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut placed_moved = 0;
+    let mut layered = vec![LayerPlacement::default(); meshes.len()];
+    if collides {
+        let thickness = scene.cloth.thickness;
+        let mut placer = ExactCollider::new(&body.mesh, thickness)?;
+        for m in &mut meshes {
+            placed_moved += garment_fit::place_outside(m, &mut placer);
+        }
+        // Lowest layer first; ties in the order listed.
+        let mut order: Vec<usize> = (0..meshes.len()).collect();
+        order.sort_by_key(|&k| (worn[k].layer, k));
+        for (rank, &k) in order.iter().enumerate() {
+            let lower: Vec<usize> = order[..rank]
+                .iter()
+                .copied()
+                .filter(|&j| worn[j].layer < worn[k].layer)
+                .collect();
+            if lower.is_empty() {
+                continue;
+            }
+            let inner = join(lower.iter().map(|&j| &meshes[j]));
+            let cell = garment_fit::median_edge(&inner).max(0.005);
+            let gap = LAYER_GAP * scene.cloth.self_thickness;
+            let m = &mut meshes[k];
+            layered[k] = garment_fit::place_over(m, &inner, &mut placer, (gap, cell, LAYER_DEPTH));
+            placed_moved += garment_fit::place_outside(m, &mut placer);
+        }
+    }
+    let mut wear = Vec::new();
+    let mut attachments = Vec::new();
+    let mut base = 0u32;
+    for (w, m) in worn.iter().zip(&meshes) {
+        if matches!(w.garment, GarmentSection::Mhclo(_)) {
+            for mut a in garment_fit::attach_small_pieces(m, 0.1, 0.03) {
+                a.vertex += base;
+                a.triangle = a.triangle.map(|v| v + base);
+                attachments.push(a);
+            }
+        }
+        let n = m.positions.len() as u32;
+        let density = w.wear.density.unwrap_or(scene.cloth.density);
+        wear.push(GarmentWear {
+            particles: base..base + n,
+            layer: w.layer,
+            density_ratio: density / scene.cloth.density,
+            stiffness: w.wear.stiffness,
+        });
+        base += n;
+    }
+    Ok(Dressed {
+        mesh: join(&meshes),
+        wear,
+        placed_moved,
+        layered,
+        attachments,
+    })
+}
+
+/// The vertex range of each garment, for reports.
+pub fn ranges(wear: &[GarmentWear]) -> Vec<Range<u32>> {
+    wear.iter().map(|w| w.particles.clone()).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn joined_meshes_keep_their_faces_on_their_own_vertices() {
+        let a = tryon_core::mesh::grid_xz(1, 1, 1.0, 1.0, 0.0);
+        let b = tryon_core::mesh::grid_xz(2, 1, 1.0, 1.0, 0.5);
+        let j = join([&a, &b]);
+        assert_eq!(j.positions.len(), 4 + 6);
+        assert_eq!(j.faces.len(), a.faces.len() + b.faces.len());
+        let first = |f: &Face| match f {
+            Face::Tri(t) => t.to_vec(),
+            Face::Quad(q) => q.to_vec(),
+        };
+        assert!(
+            j.faces[..a.faces.len()]
+                .iter()
+                .all(|f| first(f).iter().all(|&v| v < 4))
+        );
+        assert!(
+            j.faces[a.faces.len()..]
+                .iter()
+                .all(|f| first(f).iter().all(|&v| v >= 4))
+        );
+        assert_eq!(j.positions[4..], b.positions[..]);
+    }
+}
