@@ -49,7 +49,7 @@ fn cloth_step(c: &mut Criterion) {
         .sample_size(10)
         .warm_up_time(Duration::from_secs(1))
         .measurement_time(Duration::from_secs(4));
-    let cases: [(&str, &str, &[&str], usize); 12] = [
+    let cases: [(&str, &str, &[&str], usize); 14] = [
         (
             "vbd_drape_64",
             "drape-sphere.toml",
@@ -142,6 +142,14 @@ fn cloth_step(c: &mut Criterion) {
             "makehuman-dress-walk.toml",
             &["effects.self_collision=true"],
             30,
+        ),
+        // Two garments (a slip under the dress) with and without contact between them.
+        ("vbd_layered_walk", "layered-walk.toml", &[], 60),
+        (
+            "vbd_layered_walk_no_contact",
+            "layered-walk.toml",
+            &["effects.cloth_collision=false"],
+            60,
         ),
     ];
     for (name, file, sets, frames) in cases {
