@@ -219,7 +219,12 @@ impl Scene {
                 .entry(t.to_string())
                 .or_insert_with(|| toml::Value::Table(toml::Table::new()));
             let toml::Value::Table(section) = entry else {
-                return Err(bad("a key inside a [table]"));
+                return Err(match entry {
+                    toml::Value::Array(_) => bad(&format!(
+                        "a key of a single table: the [[{t}]] list is set in the scene file"
+                    )),
+                    _ => bad("a key inside a [table]"),
+                });
             };
             section.insert(k.to_string(), parsed);
         }
