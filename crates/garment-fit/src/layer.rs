@@ -29,7 +29,7 @@ pub struct LayerPlacement {
 }
 
 /// The inner garment's triangles hashed by their boxes on a uniform grid of cell `cell`.
-struct Hash {
+pub(crate) struct Hash {
     cell: Real,
     cells: HashMap<[i64; 3], Vec<u32>>,
 }
@@ -39,7 +39,7 @@ impl Hash {
         [0, 1, 2].map(|k| (p[k] / self.cell).floor() as i64)
     }
 
-    fn new(x: &[Vec3], tris: &[[u32; 3]], cell: Real) -> Hash {
+    pub(crate) fn new(x: &[Vec3], tris: &[[u32; 3]], cell: Real) -> Hash {
         let mut h = Hash {
             cell,
             cells: HashMap::new(),
@@ -60,7 +60,7 @@ impl Hash {
     }
 
     /// Triangles in the cells of the box spanning `a` and `b` (with repeats).
-    fn near(&self, a: &Vec3, b: &Vec3, out: &mut Vec<u32>) {
+    pub(crate) fn near(&self, a: &Vec3, b: &Vec3, out: &mut Vec<u32>) {
         out.clear();
         let (lo, hi) = (self.key(&a.inf(b)), self.key(&a.sup(b)));
         for x in lo[0]..=hi[0] {
@@ -76,7 +76,7 @@ impl Hash {
 }
 
 /// Where the line `p + s n` meets triangle `c` (Moller-Trumbore): `s`, if it does.
-fn ray_triangle(p: &Vec3, n: &Vec3, c: &[Vec3; 3]) -> Option<Real> {
+pub(crate) fn ray_triangle(p: &Vec3, n: &Vec3, c: &[Vec3; 3]) -> Option<Real> {
     let (e1, e2) = (c[1] - c[0], c[2] - c[0]);
     let q = n.cross(&e2);
     let det = e1.dot(&q);
@@ -93,12 +93,30 @@ fn ray_triangle(p: &Vec3, n: &Vec3, c: &[Vec3; 3]) -> Option<Real> {
     Some(e2.dot(&r) / det)
 }
 
+/// Least cosine between a vertex's body normal and the mean body normal of a triangle's corners
+/// for the triangle to count as a layer over or under the vertex. A sleeve hanging by the hip
+/// meets the skirt along its normal, but the skirt there faces the other way: it is beside the
+/// sleeve, not under it.
+const SAME_SIDE: Real = 0.5;
+
+/// Whether the triangle `tri`, whose corners' body normals `probes` give, faces the same way
+/// as the body normal `n`.
+pub(crate) fn faces_with(n: &Vec3, tri: &[u32; 3], probes: &[Probe]) -> bool {
+    let m: Vec3 = tri
+        .iter()
+        .filter_map(|&v| probes.get(v as usize))
+        .map(|p| p.normal)
+        .sum();
+    n.dot(&m) > SAME_SIDE * m.norm()
+}
+
 /// How far each outer vertex must move out along `probes`' normals to stand `gap` above where
-/// its normal line meets the inner garment (`inner`, `tris`) within `depth` above or below it.
+/// its normal line meets the inner garment (`inner`, `tris`, its vertices' body probes
+/// `inner_probes`) within `depth` above or below it.
 fn pushes(
     outer: &[Vec3],
     probes: &[Probe],
-    (inner, tris): (&[Vec3], &[[u32; 3]]),
+    (inner, tris, inner_probes): (&[Vec3], &[[u32; 3]], &[Probe]),
     (gap, cell, depth): (Real, Real, Real),
 ) -> Vec<Real> {
     let hash = Hash::new(inner, tris, cell.max(1e-3));
@@ -114,7 +132,11 @@ fn pushes(
             hash.near(&(p - n * depth), &(p + n * depth), &mut near);
             let mut need: Real = 0.0;
             for &t in &near {
-                let c = tris[t as usize].map(|v| inner[v as usize]);
+                let tri = tris[t as usize];
+                if !faces_with(&n, &tri, inner_probes) {
+                    continue;
+                }
+                let c = tri.map(|v| inner[v as usize]);
                 if let Some(s) = ray_triangle(p, &n, &c).filter(|s| s.abs() < depth) {
                     need = need.max(s + gap);
                 }
@@ -147,15 +169,59 @@ fn spread(mesh: &PolyMesh, push: &mut [Real]) {
     }
 }
 
+/// Passes carrying pushes up through the outer garment's own layers.
+const STACK_PASSES: usize = 3;
+
+/// Raises the push of every outer triangle that stands over an outer vertex (on the vertex's
+/// normal line, within `depth` above it, facing the same way) to at least that vertex's push: a
+/// lapel over a jacket's front, a doubled hem, moves out as far as the layer under it, so
+/// lifting a garment over another does not press its own layers into each other.
+fn stack(
+    (x, tris, probes): (&[Vec3], &[[u32; 3]], &[Probe]),
+    push: &mut [Real],
+    (cell, depth): (Real, Real),
+) {
+    let hash = Hash::new(x, tris, cell.max(1e-3));
+    let mut near = Vec::new();
+    for _ in 0..STACK_PASSES {
+        let mut raised = false;
+        for (v, (p, probe)) in x.iter().zip(probes).enumerate() {
+            let n = probe.normal;
+            if !(push[v] > 0.0) || n == Vec3::zeros() {
+                continue;
+            }
+            hash.near(p, &(p + n * depth), &mut near);
+            for &t in &near {
+                let tri = tris[t as usize];
+                if tri.contains(&(v as u32)) || !faces_with(&n, &tri, probes) {
+                    continue;
+                }
+                let c = tri.map(|u| x[u as usize]);
+                if ray_triangle(p, &n, &c).is_some_and(|s| s > 0.0 && s < depth) {
+                    for u in tri {
+                        if push[u as usize] < push[v] {
+                            push[u as usize] = push[v];
+                            raised = true;
+                        }
+                    }
+                }
+            }
+        }
+        if !raised {
+            break;
+        }
+    }
+}
+
 /// Rounds of placement: each looks again at the shapes the last left.
 const ROUNDS: usize = 3;
 
 /// How far each outer triangle's corners must move out for the inner garment's vertices
 /// (`inner`, with their body `probes`) to stand `gap` under it: where an inner vertex's normal
-/// line meets an outer triangle less than `gap` above it (or below it, within `depth`), the
-/// triangle's corners take the difference.
+/// line meets an outer triangle (its corners' body probes `outer_probes`) less than `gap` above
+/// it (or below it, within `depth`), the triangle's corners take the difference.
 fn lifts(
-    (outer, tris): (&[Vec3], &[[u32; 3]]),
+    (outer, tris, outer_probes): (&[Vec3], &[[u32; 3]], &[Probe]),
     inner: &[Vec3],
     probes: &[Probe],
     (gap, cell, depth): (Real, Real, Real),
@@ -171,6 +237,9 @@ fn lifts(
         hash.near(&(u - n * depth), &(u + n * depth), &mut near);
         for &t in &near {
             let tri = tris[t as usize];
+            if !faces_with(&n, &tri, outer_probes) {
+                continue;
+            }
             let c = tri.map(|v| outer[v as usize]);
             if let Some(s) = ray_triangle(u, &n, &c).filter(|s| s.abs() < depth && *s < gap) {
                 for v in tri {
@@ -203,14 +272,23 @@ pub fn place_over(
     for _ in 0..ROUNDS {
         body.probe(&outer.positions, &all, &mut probes);
         let sizes = (gap, cell, depth);
-        let inner_mesh = (inner.positions.as_slice(), inner_tris.as_slice());
+        let inner_mesh = (
+            inner.positions.as_slice(),
+            inner_tris.as_slice(),
+            inner_probes.as_slice(),
+        );
         let mut push = pushes(&outer.positions, &probes, inner_mesh, sizes);
-        let outer_mesh = (outer.positions.as_slice(), outer_tris.as_slice());
+        let outer_mesh = (
+            outer.positions.as_slice(),
+            outer_tris.as_slice(),
+            probes.as_slice(),
+        );
         let lift = lifts(outer_mesh, &inner.positions, &inner_probes, sizes);
         for (p, l) in push.iter_mut().zip(&lift) {
             *p = p.max(*l);
         }
         spread(outer, &mut push);
+        stack(outer_mesh, &mut push, (cell, depth));
         let mut moved = false;
         for ((p, probe), s) in outer.positions.iter_mut().zip(&probes).zip(&push) {
             if *s > 0.0 && s.is_finite() {
@@ -296,5 +374,33 @@ mod tests {
         let mut outer = grid_xz(11, 11, 0.2, 0.2, 0.01);
         place_over(&mut outer, &inner, &mut Floor, (0.002, 0.02, 0.1));
         assert!(outer.positions.iter().all(|p| p.y >= 0.022 - 1e-12));
+    }
+
+    #[test]
+    fn a_flap_of_the_outer_garment_stays_over_the_layer_it_covers() {
+        // The outer garment: a sheet at 1.2 cm with a flap of its own 4 mm over its middle. The
+        // inner sheet at 1 cm makes the outer sheet rise to 1.6 cm (gap 6 mm), as high as the
+        // flap: the flap must rise with it.
+        let inner = grid_xz(10, 10, 0.2, 0.2, 0.01);
+        let mut outer = grid_xz(10, 10, 0.2, 0.2, 0.012);
+        let base = outer.positions.len() as u32;
+        let flap = grid_xz(4, 4, 0.08, 0.08, 0.016);
+        outer.positions.extend_from_slice(&flap.positions);
+        outer.faces.extend(flap.faces.iter().map(|f| match f {
+            tryon_core::mesh::Face::Tri(t) => tryon_core::mesh::Face::Tri(t.map(|v| v + base)),
+            tryon_core::mesh::Face::Quad(q) => tryon_core::mesh::Face::Quad(q.map(|v| v + base)),
+        }));
+        place_over(&mut outer, &inner, &mut Floor, (0.006, 0.02, 0.05));
+        let sheet = &outer.positions[..base as usize];
+        for f in &outer.positions[base as usize..] {
+            let under = sheet
+                .iter()
+                .min_by(|a, b| {
+                    let d = |p: &Vec3| (p.x - f.x).hypot(p.z - f.z);
+                    d(a).total_cmp(&d(b))
+                })
+                .unwrap();
+            assert!(f.y - under.y >= 0.004 - 1e-9, "flap {f:?} over {under:?}");
+        }
     }
 }

@@ -10,14 +10,16 @@ pub mod close;
 pub mod layer;
 pub mod mhclo;
 pub mod patterns;
+pub mod pieces;
 pub mod weld;
 
-pub use attach::{Attachment, apply_attachments, attach_small_pieces, components};
+pub use attach::{Attachment, Riding, apply_attachments, attach_small_pieces, components};
 pub use bands::{boundary_loops, select_bands};
 pub use close::{CloseError, close_openings};
 pub use layer::{LayerPlacement, place_over};
 pub use mhclo::{FitError, binding_scales, fit_garment, fit_garment_outside, fit_positions};
 pub use patterns::{DressParams, Garment, PatternError, SkirtParams, dress, place_outside, skirt};
+pub use pieces::place_pieces;
 pub use weld::{Welded, median_edge, weld_short_edges};
 
 /// Union-find root of `a` with path halving (`parent[r] == r` at a root).

@@ -98,6 +98,7 @@ impl Pipeline {
             placed_moved,
             wear: dressed.wear,
             layered: dressed.layered,
+            pieces: dressed.pieces,
             frames,
             fps,
             grab,

@@ -60,6 +60,8 @@ pub struct Pipeline {
     pub wear: Vec<cloth_dyn::wear::GarmentWear>,
     /// What wearing each garment over the lower layers moved (one per garment).
     pub layered: Vec<garment_fit::LayerPlacement>,
+    /// What wearing each garment's separate pieces over each other moved (one per garment).
+    pub pieces: Vec<garment_fit::LayerPlacement>,
     pub frames: usize,
     pub fps: Real,
     /// A grab still to happen (`[garment] grab`).
@@ -206,8 +208,13 @@ impl Pipeline {
         report.body_parts = parts as u32;
         if !self.attachments.is_empty() {
             timers.time("attach_pieces", || {
+                let riding = match self.scene.effects.self_collision {
+                    true => garment_fit::Riding::Whole,
+                    false => garment_fit::Riding::PerVertex,
+                };
                 garment_fit::apply_attachments(
                     &self.attachments,
+                    riding,
                     &mut self.cloth.positions,
                     &mut self.cloth.velocities,
                 )

@@ -88,6 +88,10 @@ pub struct Metrics {
     /// Garment vertices moved out over the layers beneath when dressing, and the farthest move (m).
     pub layer_placement_moved: usize,
     pub layer_placement_farthest_m: Real,
+    /// Vertices of real garments' separate pieces (a jacket over its skirt, a patch on shorts)
+    /// moved out over the pieces beneath when dressing, and the farthest move (m).
+    pub piece_placement_moved: usize,
+    pub piece_placement_farthest_m: Real,
     /// With contact between layers of cloth: what pulling apart the layers that crossed or
     /// touched in the starting shape did before the first step.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -259,6 +263,9 @@ impl Pipeline {
         stats.metrics.layer_placement_moved = self.layered.iter().map(|l| l.moved).sum();
         stats.metrics.layer_placement_farthest_m =
             self.layered.iter().map(|l| l.farthest).fold(0.0, Real::max);
+        stats.metrics.piece_placement_moved = self.pieces.iter().map(|l| l.moved).sum();
+        stats.metrics.piece_placement_farthest_m =
+            self.pieces.iter().map(|l| l.farthest).fold(0.0, Real::max);
         let mut timers = Timers::default();
         sink.begin(&RunHeader {
             name: &self.scene.scene.name,

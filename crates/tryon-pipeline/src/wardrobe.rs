@@ -21,6 +21,10 @@ const LAYER_DEPTH: Real = 0.04;
 /// than it, so the layers start apart.
 const LAYER_GAP: Real = 1.5;
 
+/// A piece of a real garment with fewer than this share of the vertices of another it overlaps
+/// is sewn on it (a patch, a pocket): it lies over it and rides on it.
+const SMALL_PIECE: Real = 0.1;
+
 /// The garments as one cloth.
 #[derive(Clone, Debug)]
 pub struct Dressed {
@@ -32,6 +36,8 @@ pub struct Dressed {
     pub placed_moved: usize,
     /// What wearing each garment over the lower layers moved (one per garment).
     pub layered: Vec<LayerPlacement>,
+    /// What wearing each garment's separate pieces over each other moved (one per garment).
+    pub pieces: Vec<LayerPlacement>,
     /// Small separate pieces of the real garments riding on the piece beneath them (in `mesh`'s
     /// numbering).
     pub attachments: Vec<Attachment>,
@@ -66,6 +72,26 @@ fn join<'a>(meshes: impl IntoIterator<Item = &'a PolyMesh>) -> PolyMesh {
     out
 }
 
+/// Wears a real garment's separate pieces over each other (`garment_fit::place_pieces`) and
+/// clears the body again; only where the cloth meets itself, which alone keeps them apart.
+fn wear_pieces(
+    scene: &Scene,
+    garment: &GarmentSection,
+    m: &mut PolyMesh,
+    placer: &mut ExactCollider,
+) -> LayerPlacement {
+    if !scene.effects.self_collision || !matches!(garment, GarmentSection::Mhclo(_)) {
+        return LayerPlacement::default();
+    }
+    let gap = LAYER_GAP * scene.cloth.self_thickness;
+    let cell = garment_fit::median_edge(m).max(0.005);
+    let r = garment_fit::place_pieces(m, placer, (gap, cell, LAYER_DEPTH), SMALL_PIECE);
+    if r.moved > 0 {
+        garment_fit::place_outside(m, placer);
+    }
+    r
+}
+
 /// Builds, places and joins the scene's garments on `body`; `collides` says whether the body is
 /// collided with (placement needs it).
 pub(crate) fn dress(
@@ -80,11 +106,14 @@ pub(crate) fn dress(
         .collect::<Result<Vec<_>, _>>()?;
     let mut placed_moved = 0;
     let mut layered = vec![LayerPlacement::default(); meshes.len()];
+    let mut pieces = vec![LayerPlacement::default(); meshes.len()];
     if collides {
         let thickness = scene.cloth.thickness;
         let mut placer = ExactCollider::new(&body.mesh, thickness)?;
-        for m in &mut meshes {
+        let gap = LAYER_GAP * scene.cloth.self_thickness;
+        for (k, m) in meshes.iter_mut().enumerate() {
             placed_moved += garment_fit::place_outside(m, &mut placer);
+            pieces[k] = wear_pieces(scene, worn[k].garment, m, &mut placer);
         }
         // Lowest layer first; ties in the order listed.
         let mut order: Vec<usize> = (0..meshes.len()).collect();
@@ -100,10 +129,13 @@ pub(crate) fn dress(
             }
             let inner = join(lower.iter().map(|&j| &meshes[j]));
             let cell = garment_fit::median_edge(&inner).max(0.005);
-            let gap = LAYER_GAP * scene.cloth.self_thickness;
             let m = &mut meshes[k];
             layered[k] = garment_fit::place_over(m, &inner, &mut placer, (gap, cell, LAYER_DEPTH));
             placed_moved += garment_fit::place_outside(m, &mut placer);
+            // Lifted over the garments beneath, its pieces may have closed on each other.
+            let again = wear_pieces(scene, worn[k].garment, m, &mut placer);
+            pieces[k].moved += again.moved;
+            pieces[k].farthest = pieces[k].farthest.max(again.farthest);
         }
     }
     let mut wear = Vec::new();
@@ -111,7 +143,7 @@ pub(crate) fn dress(
     let mut base = 0u32;
     for (w, m) in worn.iter().zip(&meshes) {
         if matches!(w.garment, GarmentSection::Mhclo(_)) {
-            for mut a in garment_fit::attach_small_pieces(m, 0.1, 0.03) {
+            for mut a in garment_fit::attach_small_pieces(m, SMALL_PIECE, 0.03) {
                 a.vertex += base;
                 a.triangle = a.triangle.map(|v| v + base);
                 attachments.push(a);
@@ -132,6 +164,7 @@ pub(crate) fn dress(
         wear,
         placed_moved,
         layered,
+        pieces,
         attachments,
     })
 }
