@@ -465,3 +465,48 @@ fn the_run_reports_what_the_body_press_moved_and_nothing_when_it_is_off() {
         (None, None)
     );
 }
+
+#[test]
+fn garments_worn_together_are_told_apart_in_the_glb_and_the_preview() {
+    let file = repo().join("data/scenes/layered-walk.toml");
+    let scene = Scene::load(&file).unwrap_or_else(|e| panic!("{e}"));
+    let dir = scratch_dir("layered-outputs");
+    let mut p = Pipeline::new(scene).unwrap();
+    p.run_to(&dir, Some(3), |_, _| {}).unwrap();
+    let bytes = std::fs::read(dir.join("scene.glb")).unwrap();
+    let doc = gltf::Gltf::from_slice(&bytes).unwrap();
+    let garment = doc.meshes().nth(1).unwrap();
+    let len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let json: serde_json::Value = serde_json::from_slice(&bytes[20..20 + len]).unwrap();
+    let names: Vec<String> = garment
+        .primitives()
+        .map(|q| {
+            let m = q.material().index().unwrap();
+            json["materials"][m]["name"]
+                .as_str()
+                .unwrap_or("")
+                .to_string()
+        })
+        .collect();
+    assert_eq!(names, ["skirt", "dress"], "a primitive per garment, named");
+    let report = khronos_errors(&dir.join("scene.glb"));
+    assert!(report.contains(" 0 errors"), "{report}");
+    // The preview draws the outer dress in the second garment colour.
+    let png = png::Decoder::new(std::io::Cursor::new(
+        std::fs::read(dir.join("preview.png")).unwrap(),
+    ));
+    let mut reader = png.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    reader.next_frame(&mut buf).unwrap();
+    let red = tryon_io::garment_colour(1);
+    let near = |px: &[u8]| {
+        let s: Vec<Real> = px.iter().map(|&c| c as Real).collect();
+        let r: Vec<Real> = red.iter().map(|&c| c as Real).collect();
+        // Shading scales the colour: the pixel is a multiple of it.
+        let k = s[0] / r[0];
+        k > 0.3 && (0..3).all(|i| (s[i] - k * r[i]).abs() < 12.0)
+    };
+    let dress = buf.chunks(3).filter(|px| near(px)).count();
+    assert!(dress > 5000, "{dress} pixels of the dress's colour");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -47,6 +47,10 @@ pub struct GlbHeader<'a> {
     pub name: &'a str,
     pub body: BodyExport<'a>,
     pub garment_triangles: &'a [[u32; 3]],
+    /// The garments worn, by name, and which of them each garment triangle belongs to: each is
+    /// its own primitive with its own material. Empty for one garment named "garment".
+    pub garment_names: &'a [String],
+    pub triangle_garment: &'a [u16],
 }
 
 /// A skinned body's pose in one frame: the root's translation from rest and every joint's local
@@ -107,6 +111,8 @@ pub struct GlbWriter {
     name: String,
     pub(crate) body: OwnedBody,
     pub(crate) garment_triangles: Vec<[u32; 3]>,
+    /// Each garment's name and triangles (at least one).
+    pub(crate) parts: Vec<GarmentPart>,
     spool: Spool,
     spooled: u64,
     pub(crate) times: Vec<Real>,
@@ -175,7 +181,9 @@ impl GlbWriter {
                 (s.positions, s.triangles, Some(rig))
             }
         };
+        let parts = garment_parts(h)?;
         Ok(GlbWriter {
+            parts,
             path,
             name: h.name.to_string(),
             body: OwnedBody {
@@ -407,6 +415,38 @@ impl GlbWriter {
         }
         Ok(layout)
     }
+}
+
+/// A garment's name and triangles.
+pub(crate) type GarmentPart = (String, Vec<[u32; 3]>);
+
+/// The header's garments with their triangles, in order; one named "garment" for none.
+fn garment_parts(h: &GlbHeader) -> Result<Vec<GarmentPart>, GlbError> {
+    if h.garment_names.is_empty() {
+        return Ok(vec![("garment".into(), h.garment_triangles.to_vec())]);
+    }
+    if h.triangle_garment.len() != h.garment_triangles.len() {
+        return Err(GlbError::Invalid(format!(
+            "{} garment triangles but {} garment ids",
+            h.garment_triangles.len(),
+            h.triangle_garment.len()
+        )));
+    }
+    let mut parts: Vec<GarmentPart> = h
+        .garment_names
+        .iter()
+        .map(|n| (n.clone(), Vec::new()))
+        .collect();
+    for (t, &g) in h.garment_triangles.iter().zip(h.triangle_garment) {
+        let Some(part) = parts.get_mut(g as usize) else {
+            return Err(GlbError::Invalid(format!(
+                "a triangle of garment {g}, but {} garments are named",
+                h.garment_names.len()
+            )));
+        };
+        part.1.push(*t);
+    }
+    Ok(parts)
 }
 
 /// Where a GLB's frames are spooled while it is written.

@@ -246,10 +246,13 @@ pub(crate) fn document(w: &GlbWriter, name: &str, d: &mut Doc) -> Value {
     let mut meshes: Vec<Value> = Vec::new();
     let times: Vec<f32> = w.times.iter().map(|&t| t as f32).collect();
     let time_acc = d.floats(&times, 1, "SCALAR", None, true);
-    let materials = json!([
-        {"name": "body", "pbrMetallicRoughness": {"baseColorFactor": [0.80, 0.66, 0.58, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.8}},
-        {"name": "garment", "doubleSided": true, "pbrMetallicRoughness": {"baseColorFactor": [0.20, 0.32, 0.70, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.9}}
-    ]);
+    let mut materials = vec![
+        json!({"name": "body", "pbrMetallicRoughness": {"baseColorFactor": [0.80, 0.66, 0.58, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.8}}),
+    ];
+    for (k, (name, _)) in w.parts.iter().enumerate() {
+        let c = crate::preview::garment_colour(k).map(|c| c as f32 / 255.0);
+        materials.push(json!({"name": name, "doubleSided": true, "pbrMetallicRoughness": {"baseColorFactor": [c[0], c[1], c[2], 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.9}}));
+    }
     // Body.
     let (bx, btris) = (&w.body.positions, &w.body.triangles);
     let pos = d.floats(&flat(bx), 3, "VEC3", Some(34962), true);
@@ -350,7 +353,6 @@ fn garment(w: &GlbWriter, d: &mut Doc, a: &mut Anim, meshes: &mut Vec<Value>, ti
     let n = w.base.len();
     let gpos = d.floats(&flat(&w.base), 3, "VEC3", Some(34962), true);
     let gnrm = d.floats(&unit_f32(&w.base_normals), 3, "VEC3", Some(34962), false);
-    let gidx = d.indices(&w.garment_triangles);
     let bytes = 12 * n as u64;
     let targets: Vec<Value> = w
         .targets
@@ -365,13 +367,23 @@ fn garment(w: &GlbWriter, d: &mut Doc, a: &mut Anim, meshes: &mut Vec<Value>, ti
             json!({"POSITION": p, "NORMAL": nm})
         })
         .collect();
-    let mut prim =
-        json!({"attributes": {"POSITION": gpos, "NORMAL": gnrm}, "indices": gidx, "material": 1});
+    // One primitive per garment: the vertices and their frames are shared, the triangles and
+    // the material are the garment's own.
     let t = targets.len();
-    if t > 0 {
-        prim["targets"] = json!(targets);
-    }
-    let mut gmesh = json!({"name": "garment", "primitives": [prim]});
+    let prims: Vec<Value> = w
+        .parts
+        .iter()
+        .enumerate()
+        .filter(|(_, (_, tris))| !tris.is_empty())
+        .map(|(k, (_, tris))| {
+            let mut prim = json!({"attributes": {"POSITION": gpos, "NORMAL": gnrm}, "indices": d.indices(tris), "material": 1 + k});
+            if t > 0 {
+                prim["targets"] = json!(targets);
+            }
+            prim
+        })
+        .collect();
+    let mut gmesh = json!({"name": "garment", "primitives": prims});
     let frames = w.times.len();
     let mut weights_out = None;
     if t > 0 {

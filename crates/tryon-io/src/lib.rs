@@ -20,7 +20,7 @@ pub use data::{DATA_ENV, data_root, data_root_from};
 pub use glb::{BodyExport, FramePose, GlbError, GlbHeader, GlbWriter, SkinnedExport};
 pub use makehuman::{MhRig, load_makehuman, read_binding, read_mhskel, read_mhw, read_target};
 pub use obj::{parse_obj, read_obj};
-pub use preview::{Camera, Image, PreviewError, PreviewMesh, render, write_png};
+pub use preview::{Camera, Image, PreviewError, PreviewMesh, garment_colour, render, write_png};
 pub use read::ReadError;
 
 /// Writes `value` as pretty JSON, atomically.

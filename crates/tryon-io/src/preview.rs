@@ -14,6 +14,20 @@ pub struct PreviewMesh<'a> {
     pub color: [u8; 3],
 }
 
+/// The colour garment `k` of a scene is drawn in (in the preview and the GLB's materials): the
+/// first blue, as one garment always was, then colours that tell layers apart.
+pub fn garment_colour(k: usize) -> [u8; 3] {
+    const PALETTE: [[u8; 3]; 6] = [
+        [55, 85, 170],
+        [170, 60, 55],
+        [60, 140, 80],
+        [200, 160, 50],
+        [120, 70, 150],
+        [60, 150, 160],
+    ];
+    PALETTE[k % PALETTE.len()]
+}
+
 /// A perspective camera.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {

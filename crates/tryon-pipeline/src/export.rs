@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use thiserror::Error;
 use tryon_io::{
     BodyExport, Camera, FramePose, GlbError, GlbHeader, GlbWriter, PreviewError, PreviewMesh,
-    SkinnedExport, render, write_json, write_png,
+    SkinnedExport, garment_colour, render, write_json, write_png,
 };
 
 /// Why an output could not be written.
@@ -42,6 +42,8 @@ pub struct Outputs {
     preview: Option<(usize, FrameRecord)>,
     frames: usize,
     garment_triangles: Vec<[u32; 3]>,
+    /// The garment each of `garment_triangles` belongs to.
+    triangle_garment: Vec<u16>,
     body_triangles: Vec<[u32; 3]>,
     error: Option<ExportError>,
 }
@@ -60,6 +62,7 @@ impl Outputs {
             preview: None,
             frames: 0,
             garment_triangles: Vec::new(),
+            triangle_garment: Vec::new(),
             body_triangles: Vec::new(),
             error: None,
         })
@@ -81,18 +84,17 @@ impl Outputs {
         if let Some((_, rec)) = &self.preview {
             let path = self.dir.join("preview.png");
             let body = p.body_at(rec.pose.as_ref());
-            let meshes = [
-                PreviewMesh {
-                    positions: &body,
-                    triangles: &self.body_triangles,
-                    color: [205, 170, 150],
-                },
-                PreviewMesh {
-                    positions: &rec.garment,
-                    triangles: &self.garment_triangles,
-                    color: [55, 85, 170],
-                },
-            ];
+            let parts = self.garments();
+            let mut meshes = vec![PreviewMesh {
+                positions: &body,
+                triangles: &self.body_triangles,
+                color: [205, 170, 150],
+            }];
+            meshes.extend(parts.iter().enumerate().map(|(k, tris)| PreviewMesh {
+                positions: &rec.garment,
+                triangles: tris,
+                color: garment_colour(k),
+            }));
             let cam = Camera::framing(&meshes);
             let (w, h) = (self.config.preview_width, self.config.preview_height);
             write_png(&path, &render(&meshes, &cam, w, h))?;
@@ -110,9 +112,23 @@ impl Outputs {
     }
 }
 
+impl Outputs {
+    /// The garment triangles of each garment, in order (all in one when not told apart).
+    fn garments(&self) -> Vec<Vec<[u32; 3]>> {
+        let n = self.triangle_garment.iter().map(|&g| g as usize + 1).max();
+        let mut parts = vec![Vec::new(); n.unwrap_or(1)];
+        for (k, t) in self.garment_triangles.iter().enumerate() {
+            let g = self.triangle_garment.get(k).copied().unwrap_or(0) as usize;
+            parts[g].push(*t);
+        }
+        parts
+    }
+}
+
 impl FrameSink for Outputs {
     fn begin(&mut self, h: &RunHeader<'_>) {
         self.garment_triangles = h.garment_triangles.to_vec();
+        self.triangle_garment = h.triangle_garment.to_vec();
         self.body_triangles = h.body_triangles.to_vec();
         if !self.config.glb {
             return;
@@ -136,6 +152,8 @@ impl FrameSink for Outputs {
             name: h.name,
             body,
             garment_triangles: h.garment_triangles,
+            garment_names: h.garment_names,
+            triangle_garment: h.triangle_garment,
         };
         match GlbWriter::create(&self.dir.join("scene.glb"), &header) {
             Ok(w) => self.glb = Some(w),
@@ -189,9 +207,12 @@ impl Pipeline {
     pub fn export(&self, run: &RunOutput, dir: &Path) -> Result<Vec<PathBuf>, ExportError> {
         let mut out = Outputs::new(dir, &self.scene.output)?;
         let moving = run.frames.iter().all(|f| f.pose.is_some());
+        let (garment_names, triangle_garment) = self.output_garments(&run.garment_triangles);
         out.begin(&RunHeader {
             name: &self.scene.scene.name,
             garment_triangles: &run.garment_triangles,
+            garment_names: &garment_names,
+            triangle_garment: &triangle_garment,
             body_positions: &self.body_mesh.positions,
             body_triangles: &run.body_triangles,
             rig: self.body.rig().filter(|_| moving && self.motion.is_some()),

@@ -335,6 +335,43 @@ impl Pipeline {
         }
     }
 
+    /// Each garment's name (a real garment's file, else its kind) and, for every output triangle
+    /// (as [`Pipeline::output_triangles`] lists them), the garment it belongs to.
+    pub fn output_garments(&self, triangles: &[[u32; 3]]) -> (Vec<String>, Vec<u16>) {
+        use crate::scene::GarmentSection as G;
+        let names = self
+            .scene
+            .garments()
+            .iter()
+            .map(|w| match w.garment {
+                G::Mhclo(g) => std::path::Path::new(&g.file)
+                    .file_stem()
+                    .map_or("garment".into(), |s| s.to_string_lossy().into_owned()),
+                G::Dress(_) => "dress".into(),
+                G::Skirt(_) => "skirt".into(),
+                G::Square(_) => "sheet".into(),
+            })
+            .collect();
+        let of_coarse = |v: u32| {
+            self.wear
+                .iter()
+                .position(|w| w.particles.contains(&v))
+                .unwrap_or(0) as u16
+        };
+        let fine = !self.surface_stages.is_empty();
+        let coarse = self.surface.coarse_triangles.as_slice();
+        let of = |v: u32| match fine {
+            false => of_coarse(v),
+            true => self
+                .surface
+                .sources
+                .get(v as usize)
+                .and_then(|s| coarse.get(s.face as usize))
+                .map_or(0, |t| of_coarse(t[0])),
+        };
+        (names, triangles.iter().map(|t| of(t[0])).collect())
+    }
+
     /// The garment's output triangles (the fine surface's when the scene refines; after
     /// [`Pipeline::start`]).
     pub fn output_triangles(&self) -> Vec<[u32; 3]> {

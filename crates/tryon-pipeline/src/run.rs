@@ -151,6 +151,9 @@ pub struct Stats {
 pub struct RunHeader<'a> {
     pub name: &'a str,
     pub garment_triangles: &'a [[u32; 3]],
+    /// The garments' names, and the garment of each triangle of `garment_triangles`.
+    pub garment_names: &'a [String],
+    pub triangle_garment: &'a [u16],
     /// The body's rest positions and triangles.
     pub body_positions: &'a [Vec3],
     pub body_triangles: &'a [[u32; 3]],
@@ -235,6 +238,7 @@ impl Pipeline {
             Vec::new()
         };
         let garment_triangles = self.output_triangles();
+        let (garment_names, triangle_garment) = self.output_garments(&garment_triangles);
         let (body_triangles, _) = self.body_mesh.triangulate();
         let refines = !self.surface_stages.is_empty();
         let mut stats = Stats {
@@ -270,6 +274,8 @@ impl Pipeline {
         sink.begin(&RunHeader {
             name: &self.scene.scene.name,
             garment_triangles: &garment_triangles,
+            garment_names: &garment_names,
+            triangle_garment: &triangle_garment,
             body_positions: &self.body_mesh.positions,
             body_triangles: &body_triangles,
             rig: self.body.rig().filter(|_| moving),

@@ -22,6 +22,8 @@ fn header(body: &[Vec3]) -> GlbHeader<'_> {
             triangles: &TRI,
         },
         garment_triangles: &TRI,
+        garment_names: &[],
+        triangle_garment: &[],
     }
 }
 
@@ -206,4 +208,64 @@ fn bad_frames_are_named_and_an_empty_run_is_refused() {
     nan[1].y = Real::NAN;
     assert!(run(&[(0.0, frame(0)), (1.0, nan)]).contains("not finite"));
     assert!(run(&[(0.0, frame(0)[..2].to_vec())]).contains("past the last vertex"));
+}
+
+#[test]
+fn garments_worn_together_are_primitives_with_their_own_triangles_and_materials() {
+    let b = body();
+    // Two garments on four shared-numbered vertices: a triangle each.
+    let tris = [[0, 1, 2], [1, 3, 2]];
+    let names = ["slip".to_string(), "dress".to_string()];
+    let h = GlbHeader {
+        garment_triangles: &tris,
+        garment_names: &names,
+        triangle_garment: &[1, 0],
+        ..header(&b)
+    };
+    let quad = |z: Real| {
+        vec![
+            Vec3::new(0.0, 0.0, z),
+            Vec3::new(1.0, 0.0, z),
+            Vec3::new(0.0, 1.0, z),
+            Vec3::new(1.0, 1.0, z),
+        ]
+    };
+    let mut w = GlbWriter::in_memory(&h).unwrap();
+    w.frame(0.0, &quad(0.0), None);
+    w.frame(0.5, &quad(0.1), None);
+    let bytes = w.finish_to_vec().unwrap();
+    let g = gltf::Gltf::from_slice(&bytes).unwrap();
+    let garment = g.meshes().nth(1).unwrap();
+    let prims: Vec<_> = garment.primitives().collect();
+    assert_eq!(prims.len(), 2, "one primitive per garment");
+    let (json, bin) = chunks(&bytes);
+    for (k, (name, tri)) in [("slip", [1u32, 3, 2]), ("dress", [0, 1, 2])]
+        .iter()
+        .enumerate()
+    {
+        let m = prims[k].material().index().unwrap();
+        assert_eq!(json["materials"][m]["name"], json!(name));
+        let idx = &json["accessors"][prims[k].indices().unwrap().index()];
+        let v = &json["bufferViews"][idx["bufferView"].as_u64().unwrap() as usize];
+        let off = v["byteOffset"].as_u64().unwrap() as usize;
+        let got: Vec<u32> = bin[off..off + 12]
+            .chunks(4)
+            .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
+            .collect();
+        assert_eq!(got, tri.to_vec(), "{name}'s triangle");
+        assert_eq!(prims[k].morph_targets().count(), 1, "frames shared");
+    }
+    let colour = |k: usize| {
+        prims[k]
+            .material()
+            .pbr_metallic_roughness()
+            .base_color_factor()
+    };
+    assert_ne!(colour(0), colour(1), "told apart by colour");
+    // A triangle of a garment not named is refused.
+    let bad = GlbHeader {
+        triangle_garment: &[0, 2],
+        ..h
+    };
+    assert!(GlbWriter::in_memory(&bad).is_err());
 }
