@@ -19,12 +19,34 @@ const KEEP_PASSES: usize = 4;
 /// Farthest a carry's pairs are looked for (m).
 const CARRY_REACH: Real = 0.05;
 
+/// Which side of `st` yields: true for the side of positive weights. Where the vertices' body
+/// distances (`depth`, one per vertex, or empty) put one side more than a thickness farther out,
+/// that outer side, which moves away from the body; else the side that moved less toward the
+/// other (`a_pos`, `a_neg`). An inner layer made to
+/// yield would be pushed into the body, and the solve's swept body contact, which keeps each
+/// vertex on the side it starts on, would then hold it there.
+fn yielding_positive(st: &Stencil, depth: &[Real], (a_pos, a_neg): (Real, Real)) -> bool {
+    let side = |positive: bool| -> Option<Real> {
+        (0..4)
+            .filter(|&m| st.w[m] != 0.0 && (st.w[m] > 0.0) == positive)
+            .map(|m| depth.get(st.v[m] as usize).map(|d| st.w[m].abs() * d))
+            .sum()
+    };
+    // Side by side (within a thickness of the same depth) there is no outer side.
+    let apart = |a: Real, b: Real| a > b + st.thickness;
+    match (side(true), side(false)) {
+        (Some(p), Some(n)) if apart(p, n) => true,
+        (Some(p), Some(n)) if apart(n, p) => false,
+        _ => a_pos <= a_neg,
+    }
+}
+
 /// Opens the pairs `stencils` that moves `x - from` closed to under their kept gap (see the
-/// module's note); returns the vertices it moved.
+/// module's note; `depth`: each vertex's body distance, or empty); returns the vertices it moved.
 fn open_pairs(
     stencils: &[Stencil],
     x: &mut [Vec3],
-    from: &[Vec3],
+    (from, depth): (&[Vec3], &[Real]),
     fixed: impl Fn(usize) -> bool,
 ) -> usize {
     let mut shifted = vec![false; x.len()];
@@ -55,10 +77,10 @@ fn open_pairs(
                 // Neither side moved toward the other: the solve's own contact, not a push.
                 continue;
             }
-            let (to_pos, to_neg) = if a_pos > a_neg {
-                (0.0, deficit)
-            } else {
+            let (to_pos, to_neg) = if yielding_positive(st, depth, (a_pos, a_neg)) {
                 (deficit, 0.0)
+            } else {
+                (0.0, deficit)
             };
             for m in 0..4 {
                 let (v, w) = (st.v[m] as usize, st.w[m]);
@@ -88,23 +110,25 @@ fn open_pairs(
 
 impl SelfContacts {
     /// After the body's fail-safe moved `x` from `before` (both within this step's detection):
-    /// the step's pairs it closed opened again. Returns the vertices moved.
+    /// the step's pairs it closed opened again, the outer side yielding where `depth` (each
+    /// vertex's body distance at `x`, or empty) says which it is. Returns the vertices moved.
     pub fn keep_apart(
         &self,
         x: &mut [Vec3],
-        before: &[Vec3],
+        (before, depth): (&[Vec3], &[Real]),
         fixed: impl Fn(usize) -> bool,
     ) -> usize {
-        open_pairs(&self.stencils, x, before, fixed)
+        open_pairs(&self.stencils, x, (before, depth), fixed)
     }
 
     /// After a carry moved the cloth from `from` (where no pair crossed) to `x`: the pairs at
-    /// `from` that the carry brought within their kept gap, or through each other, opened again.
+    /// `from` that the carry brought within their kept gap, or through each other, opened again
+    /// (`depth` as for [`SelfContacts::keep_apart`]).
     /// Returns the vertices moved.
     pub fn carry_apart(
         &mut self,
         x: &mut [Vec3],
-        from: &[Vec3],
+        (from, depth): (&[Vec3], &[Real]),
         fixed: impl Fn(usize) -> bool,
     ) -> usize {
         let p = self.params;
@@ -127,6 +151,73 @@ impl SelfContacts {
                 st
             })
             .collect();
-        open_pairs(&stencils, x, from, fixed)
+        open_pairs(&stencils, x, (from, depth), fixed)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Vertex 0 over triangle (1, 2, 3), 2 mm apart along +y, keeping 3 mm.
+    fn pair() -> Stencil {
+        Stencil {
+            v: [0, 1, 2, 3],
+            w: [1.0, -1.0 / 3.0, -1.0 / 3.0, -1.0 / 3.0],
+            edges: false,
+            normal: Vec3::y(),
+            lambda: 0.0,
+            gap: 0.002,
+            thickness: 0.003,
+        }
+    }
+
+    #[test]
+    fn the_outer_side_yields_whichever_moved() {
+        // The vertex moved toward the triangle, which did not move: by motion the triangle
+        // would yield, but it is the inner layer (1 cm from the body against the vertex's 2 cm):
+        // pushed, it would go toward the body. The vertex yields.
+        let moved = (1.0, 0.0);
+        assert!(yielding_positive(&pair(), &[0.02, 0.01, 0.01, 0.01], moved));
+        // The vertex inner: the triangle yields, outward.
+        assert!(!yielding_positive(
+            &pair(),
+            &[0.01, 0.02, 0.02, 0.02],
+            (0.0, 1.0)
+        ));
+        // Side by side (within a thickness) or with no depths: the side that moved less.
+        assert!(!yielding_positive(
+            &pair(),
+            &[0.011, 0.01, 0.01, 0.01],
+            moved
+        ));
+        assert!(!yielding_positive(&pair(), &[], moved));
+        assert!(yielding_positive(&pair(), &[], (0.0, 1.0)));
+    }
+
+    #[test]
+    fn a_pair_pushed_closed_by_the_inner_layer_opens_outward() {
+        // The inner triangle (y = 0.01) was pushed 2 mm up by the body's fail-safe toward the
+        // vertex (y = 0.014): the vertex (outer) moves up to keep half the thickness.
+        let from = vec![
+            Vec3::new(0.0, 0.014, 0.0),
+            Vec3::new(-0.1, 0.008, -0.1),
+            Vec3::new(0.1, 0.008, -0.1),
+            Vec3::new(0.0, 0.008, 0.1),
+        ];
+        let mut x = from.clone();
+        for p in x.iter_mut().skip(1) {
+            p.y = 0.0135;
+        }
+        let depth = [0.014, 0.0135, 0.0135, 0.0135];
+        let mut st = pair();
+        st.gap = 0.006;
+        let moved = open_pairs(&[st], &mut x, (&from, &depth), |_| false);
+        assert_eq!(moved, 1);
+        assert!((x[0].y - (0.0135 + 0.0015)).abs() < 1e-12, "{:?}", x[0]);
+        assert!(
+            x.iter().skip(1).all(|p| p.y == 0.0135),
+            "the inner layer stays"
+        );
     }
 }

@@ -22,12 +22,14 @@ impl VbdSim {
         if self.layers.is_some() && self.untangled.is_none() {
             self.layers_untangle(x, collider);
         }
+        let depth = match self.layers.as_ref() {
+            Some(sc) if sc.last_end.len() == x.len() => body_depth(x, collider),
+            _ => return,
+        };
         let inv_mass = &self.model.inv_mass;
-        if let Some(sc) = self.layers.as_mut()
-            && sc.last_end.len() == x.len()
-        {
+        if let Some(sc) = self.layers.as_mut() {
             let from = std::mem::take(&mut sc.last_end);
-            sc.carry_apart(x, &from, |i| inv_mass[i] == 0.0);
+            sc.carry_apart(x, (&from, &depth), |i| inv_mass[i] == 0.0);
         }
     }
 
@@ -108,10 +110,19 @@ impl VbdSim {
 impl VbdSim {
     /// After the body's fail-safe moved `x` from `before`: layers it pushed into the layer over
     /// them opened again (`SelfContacts::keep_apart`).
-    pub(super) fn layers_keep(&self, x: &mut [Vec3], before: &[Vec3]) {
+    pub(super) fn layers_keep(&self, x: &mut [Vec3], before: &[Vec3], collider: &mut dyn Collider) {
         if let Some(sc) = &self.layers {
+            let depth = body_depth(x, collider);
             let inv_mass = &self.model.inv_mass;
-            sc.keep_apart(x, before, |i| inv_mass[i] == 0.0);
+            sc.keep_apart(x, (before, &depth), |i| inv_mass[i] == 0.0);
         }
     }
+}
+
+/// Every vertex's signed distance from the body at `x` (what tells the outer of two layers).
+fn body_depth(x: &[Vec3], collider: &mut dyn Collider) -> Vec<Real> {
+    let all: Vec<u32> = (0..x.len() as u32).collect();
+    let mut probes = Vec::new();
+    collider.probe(x, &all, &mut probes);
+    probes.iter().map(|p| p.distance).collect()
 }

@@ -503,7 +503,7 @@ impl VbdSim {
         let before = self.layers.as_ref().map(|_| x.clone());
         self.fail_safe(&mut x, span, collider);
         if let Some(b) = before {
-            self.layers_keep(&mut x, &b);
+            self.layers_keep(&mut x, &b, collider);
         }
         frame.positions = x;
         let max2 = self.params.max_speed * self.params.max_speed;
