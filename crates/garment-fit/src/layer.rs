@@ -314,21 +314,8 @@ pub fn place_over(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::Floor;
     use tryon_core::mesh::grid_xz;
-
-    /// The half-space y < 0 as a body: distance y, normal +y.
-    struct Floor;
-
-    impl Collider for Floor {
-        fn name(&self) -> &'static str {
-            "floor"
-        }
-        fn update(&mut self, _: &tryon_core::frames::BodyFrame) {}
-        fn resolve(&mut self, _: &mut [Vec3], _: &mut Vec<tryon_core::frames::Contact>) {}
-        fn signed_distance(&self, p: &Vec3) -> Option<Real> {
-            Some(p.y)
-        }
-    }
 
     #[test]
     fn an_outer_sheet_is_lifted_over_a_bump_of_the_inner_one() {

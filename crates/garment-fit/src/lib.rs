@@ -13,6 +13,9 @@ pub mod patterns;
 pub mod pieces;
 pub mod weld;
 
+#[cfg(test)]
+mod testing;
+
 pub use attach::{Attachment, Riding, apply_attachments, attach_small_pieces, components};
 pub use bands::{boundary_loops, select_bands};
 pub use close::{CloseError, close_openings};

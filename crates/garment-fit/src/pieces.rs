@@ -229,21 +229,8 @@ pub fn place_pieces(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing::Floor;
     use tryon_core::mesh::grid_xz;
-
-    /// The half-space y < 0 as a body: distance y, normal +y.
-    struct Floor;
-
-    impl Collider for Floor {
-        fn name(&self) -> &'static str {
-            "floor"
-        }
-        fn update(&mut self, _: &tryon_core::frames::BodyFrame) {}
-        fn resolve(&mut self, _: &mut [Vec3], _: &mut Vec<tryon_core::frames::Contact>) {}
-        fn signed_distance(&self, p: &Vec3) -> Option<Real> {
-            Some(p.y)
-        }
-    }
 
     /// `b`'s vertices and faces appended to `a`.
     fn with(mut a: PolyMesh, b: &PolyMesh) -> PolyMesh {
