@@ -21,8 +21,9 @@ const LAYER_DEPTH: Real = 0.04;
 /// than it, so the layers start apart.
 const LAYER_GAP: Real = 1.5;
 
-/// A piece of a real garment with fewer than this share of the vertices of another it overlaps
-/// is sewn on it (a patch, a pocket): it lies over it and rides on it.
+/// A piece of a real garment with fewer than this share of the garment's vertices (or, when
+/// pieces are worn over each other, of each piece beneath it) is sewn on (a patch, a pocket): it
+/// rides on its host and is lifted whole.
 const SMALL_PIECE: Real = 0.1;
 
 /// The garments as one cloth.
