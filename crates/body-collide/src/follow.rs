@@ -42,6 +42,9 @@ pub struct BodyFollower {
     attached: Vec<Option<Attachment>>,
     /// The root joint the whole cloth rides with (see `carry.rs`).
     pub carry: crate::carry::RootCarry,
+    /// The cloth's edges, kept from tearing by the carry (`carry_edges.rs`); `None` carries each
+    /// point by itself, as P1 does.
+    pub edges: Option<crate::carry_edges::CarryEdges>,
 }
 
 fn frame_of(body: &BodyMesh, f: usize) -> (Vec3, Vec3, Vec3, Vec3) {
@@ -126,7 +129,15 @@ impl BodyFollower {
             nearest: Vec::new(),
             attached: Vec::new(),
             carry: crate::carry::RootCarry::default(),
+            edges: None,
         }
+    }
+
+    /// The same follower keeping the edges of the cloth's triangles `tris` from tearing in the
+    /// carry (`carry_edges.rs`).
+    pub fn with_edges(mut self, tris: &[[u32; 3]]) -> Self {
+        self.edges = Some(crate::carry_edges::CarryEdges::of_triangles(tris));
+        self
     }
 
     /// The same follower carrying the cloth with joint `root`, whose rest position is `root_rest`.
@@ -176,19 +187,27 @@ impl BodyFollower {
             .collect()
     }
 
-    /// Takes the body's new shape and moves every recorded point to its face coordinates there.
+    /// Takes the body's new shape and moves every recorded point to its face coordinates there
+    /// (by its weight), the moves kept from tearing the cloth's `edges` when it has them.
     /// Returns how many points moved.
     pub fn apply(&mut self, frame: &BodyFrame, points: &mut [Vec3]) -> Result<usize, BodyError> {
         // Only the faces points are attached to need their normals.
         self.body.set_shape(frame)?;
         let mut moved = 0;
-        for (p, a) in points.iter_mut().zip(&self.attached) {
+        let mut d = vec![Vec3::zeros(); points.len()];
+        for ((p, a), d) in points.iter().zip(&self.attached).zip(&mut d) {
             let Some(a) = a else { continue };
             let target = place(&self.body, a.face, a.abc);
             if tryon_core::math::is_finite(&target) {
-                *p += (target - *p) * a.weight;
+                *d = (target - *p) * a.weight;
                 moved += 1;
             }
+        }
+        if let Some(e) = &self.edges {
+            e.limit(points, &mut d);
+        }
+        for (p, d) in points.iter_mut().zip(&d) {
+            *p += d;
         }
         Ok(moved)
     }

@@ -20,6 +20,7 @@
 pub mod bands;
 pub mod body;
 pub mod carry;
+pub mod carry_edges;
 pub mod ccd;
 pub mod depth;
 pub mod exact;

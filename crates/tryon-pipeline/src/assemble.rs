@@ -51,8 +51,13 @@ impl Pipeline {
             .transpose()?;
         let follower: Option<Box<dyn Follower>> = if fx.follow_body && moving {
             let (root, root_rest) = body.model.rig().map_or((0, Vec3::zeros()), |r| r.root());
-            let f = BodyFollower::new(BodyMesh::new(&body.mesh)?, FollowParams::default())
+            let mut f = BodyFollower::new(BodyMesh::new(&body.mesh)?, FollowParams::default())
                 .with_root(root, root_rest);
+            if build::self_contact_on(&fx, dressed.wear.len()) {
+                // Cloth-cloth contact lets a vertex move only a share of its nearest gap in a
+                // step: an edge the carry tore would stay torn (docs/decisions.md, session 40).
+                f = f.with_edges(&garment.triangulate().0);
+            }
             Some(Box::new(f))
         } else {
             None

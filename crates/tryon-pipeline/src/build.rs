@@ -342,8 +342,7 @@ pub fn solver(
             let model = model(&p)?;
             let c = &scene.cloth;
             let fx = &scene.effects;
-            let several = wear.len() > 1;
-            let contact = fx.self_collision || (fx.cloth_collision && several);
+            let contact = self_contact_on(fx, wear.len());
             let v = VbdParams {
                 substep: c.vbd_substep,
                 iterations: c.vbd_iterations,
@@ -448,4 +447,10 @@ fn object_on_table(scene: &Scene, b: &ObjectBody) -> Result<PolyMesh, AssembleEr
         }));
     }
     Ok(mesh)
+}
+
+/// Whether the cloth keeps apart from itself: its own pieces (`self_collision`), or several
+/// garments from each other (`cloth_collision` with more than one).
+pub fn self_contact_on(fx: &EffectsSection, garments: usize) -> bool {
+    fx.self_collision || (fx.cloth_collision && garments > 1)
 }
