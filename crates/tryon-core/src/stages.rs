@@ -287,6 +287,12 @@ pub trait ClothSolver: Send {
     fn untangled(&self) -> Option<Untangled> {
         None
     }
+    /// A copy of the solver in its present state, where it can make one: a benchmark replays one
+    /// frame from the same state, which includes what the solver remembers between frames (VBD's
+    /// last frame end, from which self-contact judges the carry). `None` by default.
+    fn boxed_clone(&self) -> Option<Box<dyn ClothSolver>> {
+        None
+    }
 }
 
 /// Where a surface stage's work is timed: `work` runs once, its wall time counted under `part`.

@@ -523,6 +523,9 @@ impl ClothSolver for VbdSim {
     fn untangled(&self) -> Option<crate::self_contact::Untangled> {
         self.untangled
     }
+    fn boxed_clone(&self) -> Option<Box<dyn ClothSolver>> {
+        Some(Box::new(self.clone()))
+    }
     fn info(&self) -> ClothInfo {
         self.model
             .info("vbd", self.vbd.substep, self.arms.len() / 2)
