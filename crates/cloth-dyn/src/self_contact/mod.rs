@@ -347,35 +347,58 @@ impl SelfContacts {
         self.broad.triangles(&plo, &phi, sc);
         let mut out = Vec::new();
         for &t in sc.found.iter() {
-            let tri = self.tris[t as usize];
             let (lo, hi) = &self.boxes[t as usize];
             let meets = (0..3).all(|k| lo[k] <= phi[k] && plo[k] <= hi[k]);
-            if !meets || tri.contains(&v) || !self.wanted(v, tri[0]) {
-                continue;
-            }
-            let c = tri.map(|i| x[i as usize]);
-            let w = geom::point_triangle(&p, &c[0], &c[1], &c[2]);
-            let d = p - (c[0] * w[0] + c[1] * w[1] + c[2] * w[2]);
-            let dist = d.norm();
-            let facing = || {
-                let n = (c[1] - c[0]).cross(&(c[2] - c[0]));
-                n.dot(&d).abs() >= FACING * n.norm() * dist
-            };
-            let r = tri.iter().map(|&u| reach[u as usize]).fold(rv, Real::max);
-            if dist < r && (!self.near_in_mesh(&[v], &tri) || facing()) {
-                let st = Stencil {
-                    v: [v, tri[0], tri[1], tri[2]],
-                    w: [1.0, -w[0], -w[1], -w[2]],
-                    edges: false,
-                    normal: d / dist.max(1e-12),
-                    lambda: 0.0,
-                    gap: dist,
-                    thickness: 0.0,
-                };
-                out.push(((v as u64) << 32 | t as u64, (st, dist)));
+            if meets && self.may_pair_vt(v, t) {
+                out.extend(self.vt_pair(x, v, t, reach));
             }
         }
         out
+    }
+
+    /// Whether vertex `v` and triangle `t` may ever pair: not a corner of it, and of garments
+    /// whose pairs count.
+    fn may_pair_vt(&self, v: u32, t: u32) -> bool {
+        let tri = self.tris[t as usize];
+        !tri.contains(&v) && self.wanted(v, tri[0])
+    }
+
+    /// Whether edges `e` and `f` may ever pair: no shared vertex, garments whose pairs count.
+    fn may_pair_ee(&self, e: u32, f: u32) -> bool {
+        let ([a, b], [c, d]) = (self.edges[e as usize], self.edges[f as usize]);
+        ![a, b].iter().any(|v| [c, d].contains(v)) && self.wanted(a, c)
+    }
+
+    /// Vertex `v` and triangle `t` at `x` as a pair, when nearer than the larger reach of their
+    /// vertices and not neighbours in the mesh beside each other.
+    fn vt_pair(&self, x: &[Vec3], v: u32, t: u32, reach: &[Real]) -> Option<(u64, Found)> {
+        let p = x[v as usize];
+        let tri = self.tris[t as usize];
+        let c = tri.map(|i| x[i as usize]);
+        let w = geom::point_triangle(&p, &c[0], &c[1], &c[2]);
+        let d = p - (c[0] * w[0] + c[1] * w[1] + c[2] * w[2]);
+        let dist = d.norm();
+        let facing = || {
+            let n = (c[1] - c[0]).cross(&(c[2] - c[0]));
+            n.dot(&d).abs() >= FACING * n.norm() * dist
+        };
+        let r = tri
+            .iter()
+            .map(|&u| reach[u as usize])
+            .fold(reach[v as usize], Real::max);
+        if !(dist < r && (!self.near_in_mesh(&[v], &tri) || facing())) {
+            return None;
+        }
+        let st = Stencil {
+            v: [v, tri[0], tri[1], tri[2]],
+            w: [1.0, -w[0], -w[1], -w[2]],
+            edges: false,
+            normal: d / dist.max(1e-12),
+            lambda: 0.0,
+            gap: dist,
+            thickness: 0.0,
+        };
+        Some(((v as u64) << 32 | t as u64, (st, dist)))
     }
 
     fn edge_pairs(
@@ -397,32 +420,45 @@ impl SelfContacts {
             let (flo, fhi) = (pc.inf(&pd), pc.sup(&pd));
             let rf = reach[c as usize].max(reach[d as usize]);
             let apart = (0..3).any(|k| flo[k] - rf > hi[k] || lo[k] > fhi[k] + rf);
-            if apart || [a, b].iter().any(|v| [c, d].contains(v)) || !self.wanted(a, c) {
-                continue;
-            }
-            let (s, t) = geom::segment_segment(&pa, &pb, &pc, &pd);
-            let off = pa + (pb - pa) * s - pc - (pd - pc) * t;
-            let dist = off.norm();
-            let facing = || {
-                // Parallel edges have no common normal: side by side, not facing.
-                let n = (pb - pa).cross(&(pd - pc));
-                let square = (pb - pa).norm() * (pd - pc).norm();
-                n.norm() > PARALLEL * square && n.dot(&off).abs() >= FACING * n.norm() * dist
-            };
-            if dist < re.max(rf) && (!self.near_in_mesh(&[a, b], &[c, d]) || facing()) {
-                let st = Stencil {
-                    v: [a, b, c, d],
-                    w: [1.0 - s, s, t - 1.0, -t],
-                    edges: true,
-                    normal: off / dist.max(1e-12),
-                    lambda: 0.0,
-                    gap: dist,
-                    thickness: 0.0,
-                };
-                out.push((1 << 63 | (e as u64) << 32 | f as u64, (st, dist)));
+            if !apart && self.may_pair_ee(e, f) {
+                out.extend(self.ee_pair(x, e, f, reach));
             }
         }
         out
+    }
+
+    /// Edges `e` and `f` at `x` as a pair, when nearer than the larger reach of their ends and
+    /// facing each other where they are neighbours in the mesh.
+    fn ee_pair(&self, x: &[Vec3], e: u32, f: u32, reach: &[Real]) -> Option<(u64, Found)> {
+        let ([a, b], [c, d]) = (self.edges[e as usize], self.edges[f as usize]);
+        let (pa, pb) = (x[a as usize], x[b as usize]);
+        let (pc, pd) = (x[c as usize], x[d as usize]);
+        let r = [a, b, c, d]
+            .iter()
+            .map(|&v| reach[v as usize])
+            .fold(0.0, Real::max);
+        let (s, t) = geom::segment_segment(&pa, &pb, &pc, &pd);
+        let off = pa + (pb - pa) * s - pc - (pd - pc) * t;
+        let dist = off.norm();
+        let facing = || {
+            // Parallel edges have no common normal: side by side, not facing.
+            let n = (pb - pa).cross(&(pd - pc));
+            let square = (pb - pa).norm() * (pd - pc).norm();
+            n.norm() > PARALLEL * square && n.dot(&off).abs() >= FACING * n.norm() * dist
+        };
+        if !(dist < r && (!self.near_in_mesh(&[a, b], &[c, d]) || facing())) {
+            return None;
+        }
+        let st = Stencil {
+            v: [a, b, c, d],
+            w: [1.0 - s, s, t - 1.0, -t],
+            edges: true,
+            normal: off / dist.max(1e-12),
+            lambda: 0.0,
+            gap: dist,
+            thickness: 0.0,
+        };
+        Some((1 << 63 | (e as u64) << 32 | f as u64, (st, dist)))
     }
 
     /// Finds the pairs at `x` (the step's start, or where a sweep left the cloth) and each
