@@ -7,7 +7,10 @@ use tryon_core::math::{Real, Vec3, is_finite};
 
 impl VbdSim {
     /// Moves the blocks of colour range `r` by their steps `dx` (non-finite steps are dropped),
-    /// and their hinges' angles with them.
+    /// and their hinges' angles with them. Every member is kept within its self-contact bound,
+    /// kinematic ones too: a band vertex set at its target by `begin` is drawn back to within its
+    /// bound of where detection saw it, so bands move no faster than the cloth pressed on them
+    /// (exempting them measured the same; docs/decisions.md, session 41).
     pub(super) fn apply(
         &mut self,
         x: &mut [Vec3],
