@@ -5,7 +5,7 @@
 //! the body's surface and moves them with it.
 
 use crate::find_root as find;
-use tryon_core::math::Real;
+use tryon_core::math::{Real, Vec3};
 use tryon_core::mesh::PolyMesh;
 use tryon_core::topology::{Topology, TopologyError};
 
@@ -64,6 +64,57 @@ pub fn select_bands(
     out
 }
 
+/// How far from the body a waist may lie and still be held as a belt holds it, unless a scene
+/// says otherwise (m).
+pub const MODELLED_WAIST_GAP: Real = 0.04;
+
+/// Share of the body's height (from its lowest point) that a piece must reach to hang from the
+/// shoulders; a piece below it (trousers, shorts, a skirt, a strapless top) rests on nothing.
+pub const SHOULDER_SHARE: Real = 0.75;
+
+/// The waists: of each piece (`piece[v]`: vertex v's piece) whose highest vertex lies below
+/// `shoulder` (height, y up), its highest loop (by mean height), when that loop has at least
+/// `min_len` vertices and 90% of them within `max_gap` of the body (`gap(v)`). Such a piece has
+/// nothing to hang from: modelled with ease at the waist, it slides down the legs at every stride,
+/// where a real one is held by its waistband, a belt or a drawstring. Returns the waist vertices,
+/// ascending.
+pub fn select_waists(
+    loops: &[Vec<u32>],
+    (piece, positions): (&[usize], &[Vec3]),
+    shoulder: Real,
+    (min_len, max_gap): (usize, Real),
+    mut gap: impl FnMut(u32) -> Real,
+) -> Vec<u32> {
+    let pieces = piece.iter().copied().max().map_or(0, |m| m + 1);
+    let mut top = vec![Real::NEG_INFINITY; pieces];
+    for (v, &c) in piece.iter().enumerate() {
+        top[c] = top[c].max(positions.get(v).map_or(Real::NEG_INFINITY, |p| p.y));
+    }
+    let mean_y = |l: &Vec<u32>| {
+        l.iter().map(|&v| positions[v as usize].y).sum::<Real>() / l.len().max(1) as Real
+    };
+    let mut best: Vec<Option<(Real, usize)>> = vec![None; pieces];
+    for (k, l) in loops.iter().enumerate() {
+        let Some(&c) = l.first().and_then(|&v| piece.get(v as usize)) else {
+            continue;
+        };
+        let y = mean_y(l);
+        if best[c].is_none_or(|(b, _)| y > b) {
+            best[c] = Some((y, k));
+        }
+    }
+    let mut out = Vec::new();
+    for (c, b) in best.iter().enumerate() {
+        if let Some((_, k)) = b
+            && top[c] < shoulder
+        {
+            out.extend(select_bands(&loops[*k..=*k], min_len, max_gap, &mut gap));
+        }
+    }
+    out.sort_unstable();
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -111,5 +162,39 @@ mod tests {
         // A closed mesh has none.
         let s = tryon_core::shapes::icosphere(1.0, 1, Vec3::zeros());
         assert!(boundary_loops(&s).unwrap().is_empty());
+    }
+
+    #[test]
+    fn the_top_loop_of_a_piece_below_the_shoulders_is_its_waist_and_only_that_one() {
+        // Two tubes: trousers (rings at heights 0..=3, top loop 36..48) and a top reaching
+        // height 13 (rings 10..=13, vertices 48..96).
+        let lower = tube(12, 3);
+        let mut upper = tube(12, 3);
+        for p in &mut upper.positions {
+            p.y += 10.0;
+        }
+        let mut pos = lower.positions.clone();
+        pos.extend(upper.positions.iter().copied());
+        let mut faces = lower.faces.clone();
+        faces.extend(upper.faces.iter().map(|f| match f {
+            Face::Quad(q) => Face::Quad(q.map(|v| v + 48)),
+            Face::Tri(t) => Face::Tri(t.map(|v| v + 48)),
+        }));
+        let m = PolyMesh::new(pos, faces).unwrap();
+        let loops = boundary_loops(&m).unwrap();
+        let piece = crate::attach::components(&m);
+        // Every loop 3 cm from the body: none is a band at 6 mm.
+        let gap = |_: u32| 0.03;
+        assert!(select_bands(&loops, 8, 0.006, gap).is_empty());
+        let waists = select_waists(&loops, (&piece, &m.positions), 12.0, (8, 0.04), gap);
+        assert_eq!(waists, (36..48).collect::<Vec<u32>>());
+        // With the shoulders above both pieces, both pieces' top loops are waists.
+        let both = select_waists(&loops, (&piece, &m.positions), 20.0, (8, 0.04), gap);
+        let mut want: Vec<u32> = (36..48).collect();
+        want.extend(84..96);
+        assert_eq!(both, want);
+        // A waist farther out than the allowed gap is left free, as is one on a short loop.
+        assert!(select_waists(&loops, (&piece, &m.positions), 12.0, (8, 0.02), gap).is_empty());
+        assert!(select_waists(&loops, (&piece, &m.positions), 12.0, (13, 0.04), gap).is_empty());
     }
 }

@@ -126,13 +126,13 @@ fn bands(
     attached.sort_unstable();
     let mut vertices = Vec::new();
     for worn in scene.garments() {
-        let band_gap = match worn.garment {
-            GarmentSection::Dress(g) => g.band_gap,
-            GarmentSection::Skirt(g) => g.band_gap,
-            GarmentSection::Mhclo(g) => g.band_gap,
-            GarmentSection::Square(_) => 0.0,
+        let (band_gap, waist_gap) = match worn.garment {
+            GarmentSection::Dress(g) => (g.band_gap, 0.0),
+            GarmentSection::Skirt(g) => (g.band_gap, 0.0),
+            GarmentSection::Mhclo(g) => (g.band_gap, g.waist_gap),
+            GarmentSection::Square(_) => (0.0, 0.0),
         };
-        if !(band_gap > 0.0) {
+        if !(band_gap > 0.0 || waist_gap > 0.0) {
             continue;
         }
         let own: Vec<Vec<u32>> = loops
@@ -143,17 +143,43 @@ fn bands(
             })
             .cloned()
             .collect();
-        vertices.extend(garment_fit::select_bands(&own, 8, band_gap, |v| {
+        let gap = |v: u32| {
             referee
                 .project(&garment.positions[v as usize])
                 .map_or(Real::INFINITY, |p| p.distance)
-        }));
+        };
+        vertices.extend(garment_fit::select_bands(&own, 8, band_gap, gap));
+        if waist_gap > 0.0 {
+            let piece = garment_fit::components(garment);
+            let waists = garment_fit::bands::select_waists(
+                &own,
+                (&piece, &garment.positions),
+                shoulder_height(body),
+                (8, waist_gap),
+                gap,
+            );
+            vertices.extend(waists);
+        }
     }
+    vertices.sort_unstable();
+    vertices.dedup();
     vertices.retain(|v| attached.binary_search(v).is_err());
     if vertices.is_empty() {
         return Ok(None);
     }
     Ok(Bands::bind(body, &garment.positions, &vertices)?)
+}
+
+/// The height (y) a garment piece must reach to hang from the body's shoulders
+/// ([`garment_fit::bands::SHOULDER_SHARE`] of the body's height in its fitted pose).
+fn shoulder_height(body: &PolyMesh) -> Real {
+    let (lo, hi) = body
+        .positions
+        .iter()
+        .fold((Real::INFINITY, Real::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(p.y), hi.max(p.y))
+        });
+    lo + garment_fit::bands::SHOULDER_SHARE * (hi - lo)
 }
 
 /// The surface stages (P1 section 4), when the scene refines: PN refinement, then the detail model

@@ -382,6 +382,12 @@ pub struct MhcloSpec {
     #[serde(default = "modelled_band_gap")]
     #[schemars(range(min = 0.0, max = 0.05))]
     pub band_gap: Real,
+    /// Waists held as a belt holds them (m): of each piece that does not reach the shoulders
+    /// (trousers, shorts, a skirt), its highest border loop grips the body where it was fitted
+    /// when 90% of it lies within this distance of the body; 0 = none.
+    #[serde(default = "modelled_waist_gap")]
+    #[schemars(range(min = 0.0, max = 0.1))]
+    pub waist_gap: Real,
     /// Closures (fraction of the median edge): border vertices the modeller left touching, as a
     /// buttoned front or a shut slit, closer than this are sewn together, where they form a seam of
     /// at least two pairs; 0 = none.
@@ -392,6 +398,10 @@ pub struct MhcloSpec {
 
 fn closure_gap() -> Real {
     garment_fit::close::MODELLED_CLOSURE_GAP
+}
+
+fn modelled_waist_gap() -> Real {
+    garment_fit::bands::MODELLED_WAIST_GAP
 }
 
 fn modelled_band_gap() -> Real {
