@@ -51,6 +51,9 @@ pub struct SweptBody {
     items: Vec<u32>,
     /// Triangles whose box spans too many cells: tried for every point.
     big: Vec<u32>,
+    /// Per body triangle, the box it sweeps over the whole move (set for the hashed ones): a
+    /// candidate whose box misses a point's path is passed over before its corners are found.
+    boxes: Vec<Aabb>,
     /// The region hashed, `None` when the hash is stale.
     region: Option<Aabb>,
 }
@@ -101,8 +104,11 @@ impl SweptBody {
         self.starts.resize(buckets + 1, 0);
         self.big.clear();
         let mut kept: Vec<(u32, [i64; 3], [i64; 3])> = Vec::new();
+        self.boxes.clear();
+        self.boxes.reserve(body.triangles.len());
         for f in 0..body.triangles.len() {
             let b = self.swept_box(body, f);
+            self.boxes.push(b);
             if !is_finite(&b.0) || !is_finite(&b.1) || !overlaps(&b, &region) {
                 continue;
             }
@@ -232,6 +238,9 @@ impl SweptBody {
         self.candidates(&pbox, found);
         let mut best: Option<(u32, Crossing)> = None;
         for &f in found.iter() {
+            if !overlaps(&self.boxes[f as usize], &pbox) {
+                continue;
+            }
             let corners = body.triangles[f as usize].map(|v| {
                 (
                     self.vertex_at(body, v, span[0]),

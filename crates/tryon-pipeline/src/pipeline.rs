@@ -307,7 +307,12 @@ impl Pipeline {
             None => &mut none,
         };
         let (solver, cloth) = (&mut self.solver, &mut self.cloth);
-        let report = timers.time("cloth", || solver.step_frame(cloth, dt, collider));
+        // Stepped on a worker of rayon's pool: the solver's parallel sweeps (dozens a step) then
+        // start there, instead of each being handed from this thread to the pool and waited
+        // for (a futex wake and sleep per sweep, 10-15% of a walk's single-thread time).
+        let report = timers.time("cloth", || {
+            rayon::scope(|_| solver.step_frame(cloth, dt, collider))
+        });
         if let Some(f) = &mut self.follower {
             timers.time("follow_body", || f.record(&cloth.positions));
         }

@@ -307,7 +307,8 @@ impl Pipeline {
                 };
                 (r, cf.positions, bf, pose, step - 1)
             } else {
-                let r = self.advance(&mut st, t, &mut timers);
+                // On a worker of rayon's pool, as the cloth step is (`advance_coarse`).
+                let r = rayon::scope(|_| self.advance(&mut st, t, &mut timers));
                 (
                     r,
                     self.cloth.positions.clone(),
