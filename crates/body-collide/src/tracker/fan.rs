@@ -3,6 +3,7 @@
 
 use super::{CREASE_REACH, Crease, FLAT, FanTest, Highest, Hit, NearestVertexCollider};
 use tryon_core::math::{Real, Vec3, closest_point_on_triangle};
+use tryon_core::stages::Probe;
 
 impl NearestVertexCollider {
     /// P1's inside test at vertex `v` (offset by the thickness): inside when behind every face of
@@ -41,8 +42,7 @@ impl NearestVertexCollider {
     /// Whether the fan of faces around `v` bounds a convex cone (every neighbour on or behind
     /// every face's plane), cached until the body moves. Behind part of a convex fan is outside.
     pub(super) fn fan_is_convex(&self, v: u32) -> bool {
-        let cell = &self.fan_convex[v as usize];
-        match cell.get() {
+        match self.fan_convex.get(v) {
             1 => return true,
             2 => return false,
             _ => {}
@@ -55,7 +55,7 @@ impl NearestVertexCollider {
                 r.dot(&n) <= FLAT * r.norm()
             })
         });
-        cell.set(if convex { 1 } else { 2 });
+        self.fan_convex.set(v, if convex { 1 } else { 2 });
         convex
     }
 
@@ -187,5 +187,65 @@ impl NearestVertexCollider {
         let v = ((d22 * r1 - d12 * r2) / det).clamp(0.0, 1.0);
         let w = ((d11 * r2 - d12 * r1) / det).clamp(0.0, 1.0 - v);
         [1.0 - v - w, v, w]
+    }
+
+    /// The probe of point `p` at its nearest vertex `v`: P1's inside test there (and the crease
+    /// test); outside, its distance to the vertex's fan, or over a convex fan, when already the
+    /// height over one of its planes is `reach` or more, that height (no point of the fan is
+    /// nearer).
+    pub(super) fn probe_at(&self, p: &Vec3, v: u32, reach: Real) -> Probe {
+        let mut closest_found: Option<(u32, Vec3)> = None;
+        let top = match self.fan_test(p, v) {
+            FanTest::Inside(f, h) => {
+                return Probe {
+                    distance: h,
+                    normal: self.body.face_normals[f as usize],
+                };
+            }
+            FanTest::Front(top, _) => top,
+            FanTest::Mixed(top) => {
+                if !self.fan_is_convex(v) {
+                    match self.crease(p, v, 0.0) {
+                        Crease::Inside(h) => {
+                            return Probe {
+                                distance: h.height,
+                                normal: h.normal,
+                            };
+                        }
+                        // Outside: the crease test found the fan's closest point already.
+                        Crease::Outside { face, closest, .. } => {
+                            closest_found = Some((face, closest));
+                        }
+                        Crease::Unknown => {}
+                    }
+                }
+                top
+            }
+        };
+        // Over a convex fan the height over the highest plane bounds the distance from below,
+        // and is the distance when the point projects into that face.
+        if top.0 != u32::MAX
+            && self.fan_is_convex(v)
+            && (top.1 >= reach || self.projects_into(top.0, p))
+        {
+            return Probe {
+                distance: top.1,
+                normal: self.body.face_normals[top.0 as usize],
+            };
+        }
+        let (f, q) = closest_found.unwrap_or_else(|| {
+            let (f, q, _) = self.body.closest_on_fan(p, v);
+            (f, q)
+        });
+        let d = p - q;
+        let n = d.norm();
+        Probe {
+            distance: n,
+            normal: if n > 1e-12 {
+                d / n
+            } else {
+                self.body.face_normals[f as usize]
+            },
+        }
     }
 }

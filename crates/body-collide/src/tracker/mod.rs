@@ -6,6 +6,8 @@
 
 use crate::body::{BodyError, BodyMesh};
 use crate::swept::SweptBody;
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicU8, Ordering};
 use tryon_core::frames::{BodyFrame, Contact};
 use tryon_core::math::{Real, Vec3};
 
@@ -23,6 +25,9 @@ const RECHECK: Real = 0.005;
 /// (elegant suit under 10_04: stretch 2.07 -> 3.51, under 131_01: 20 -> 33 mm); the product keeps
 /// cloth a thickness (mm) off the body, where micrometres do not show.
 pub(crate) const FLAT: Real = 1e-4;
+
+/// Fewest points a thread probes at once.
+const PAR_CHUNK: usize = 64;
 
 /// How many times a point is tested and moved out in one `resolve` (folds can need more than one).
 const RESOLVE_ROUNDS: usize = 3;
@@ -76,6 +81,34 @@ use tryon_core::stages::{Collider, Poke, Probe};
 mod fan;
 mod opposite;
 mod pokes;
+mod resolve;
+
+/// Per body vertex whether its fan is convex: 0 not yet known, 1 convex, 2 not. Atomic so that
+/// points probed in parallel share it: two threads judging the same fan find the same answer, so
+/// the result does not depend on which writes first.
+#[derive(Debug, Default)]
+struct ConvexCache(Vec<AtomicU8>);
+
+impl ConvexCache {
+    fn new(n: usize) -> Self {
+        ConvexCache((0..n).map(|_| AtomicU8::new(0)).collect())
+    }
+    fn get(&self, v: u32) -> u8 {
+        self.0[v as usize].load(Ordering::Relaxed)
+    }
+    fn set(&self, v: u32, state: u8) {
+        self.0[v as usize].store(state, Ordering::Relaxed);
+    }
+    fn clear(&mut self) {
+        self.0.iter_mut().for_each(|c| *c.get_mut() = 0);
+    }
+}
+
+impl Clone for ConvexCache {
+    fn clone(&self) -> Self {
+        ConvexCache(self.0.iter().map(|c| AtomicU8::new(c.load(Ordering::Relaxed))).collect())
+    }
+}
 
 /// P1's nearest-vertex tracking collider.
 #[derive(Clone, Debug)]
@@ -100,7 +133,7 @@ pub struct NearestVertexCollider {
     /// Index in `extra_pieces` of each vertex's piece (`u32::MAX` for a vertex in no face).
     piece_of: Vec<u32>,
     /// Per body vertex: 0 not yet known, 1 convex fan, 2 not (reset when the body moves).
-    fan_convex: Vec<std::cell::Cell<u8>>,
+    fan_convex: ConvexCache,
     /// Per point: where it was last found outside, at which nearest vertex, and its clearance
     /// there: how far it can move with P1's test at that vertex still saying outside (0 = test it
     /// next time). The body does not move between `update`s, so a point whose nearest vertex is
@@ -143,7 +176,7 @@ impl NearestVertexCollider {
             extra_pieces,
             nearest_more: Vec::new(),
             piece_of,
-            fan_convex: vec![std::cell::Cell::new(0); body.positions.len()],
+            fan_convex: ConvexCache::new(body.positions.len()),
             clear_at: Vec::new(),
             clear_vertex: Vec::new(),
             clearance: Vec::new(),
@@ -153,18 +186,6 @@ impl NearestVertexCollider {
             facing: Vec::new(),
             body,
         })
-    }
-
-    /// The nearest vertex of point `i` on each piece: its main track and its other pieces' tracks.
-    fn candidates(&self, i: usize) -> impl Iterator<Item = u32> + '_ {
-        let k = self.extra_pieces.len();
-        std::iter::once(self.nearest[i]).chain(
-            self.nearest_more
-                .get(i * k..(i + 1) * k)
-                .into_iter()
-                .flatten()
-                .copied(),
-        )
     }
 
     /// The nearest vertex to `p` from `start`: checked against the spatial hash when the body
@@ -248,7 +269,7 @@ impl Collider for NearestVertexCollider {
         if !same_shape {
             self.bounds = self.body.bounds();
             self.moves = self.moves.wrapping_add(1) % u32::MAX;
-            self.fan_convex.iter().for_each(|c| c.set(0));
+            self.fan_convex.clear();
             self.clearance.iter_mut().for_each(|c| *c = 0.0);
         }
     }
@@ -262,71 +283,20 @@ impl Collider for NearestVertexCollider {
         self.clearance.resize(points.len(), 0.0);
         self.clear_at.resize(points.len(), Vec3::zeros());
         self.clear_vertex.resize(points.len(), u32::MAX);
-        for (i, p) in points.iter_mut().enumerate() {
-            if !self.near_bounds(p) {
-                continue;
-            }
-            let mut contact: Option<(u32, Real, Vec3)> = None;
-            let mut clear = MAX_CLEARANCE;
-            for round in 0..RESOLVE_ROUNDS {
-                // Track the nearest vertex from where the point is now (after round 0: moved onto
-                // one face's plane, the point may still be inside a neighbouring fold).
-                self.nearest[i] = self.body.climb(p, self.nearest[i]);
-                for j in i * k..(i + 1) * k {
-                    self.nearest_more[j] = self.body.climb(p, self.nearest_more[j]);
-                }
-                // Same vertex, and within its clearance of where it was last found outside: the
-                // test would say outside again.
-                let c = self.clearance[i];
-                if round == 0
-                    && k == 0
-                    && c > 0.0
-                    && self.nearest[i] == self.clear_vertex[i]
-                    && (*p - self.clear_at[i]).norm_squared() < c * c
-                {
-                    break;
-                }
-                // Inside any piece (the shallowest hit when in several).
-                let mut hit: Option<Hit> = None;
-                for v in self.candidates(i) {
-                    match self.inside_any(p, v, self.thickness) {
-                        Ok(h) => {
-                            if hit.is_none_or(|b| h.height > b.height) {
-                                hit = Some(h);
-                            }
-                        }
-                        Err(c) => clear = clear.min(c),
-                    }
-                }
-                let Some(h) = hit else {
-                    if round == 0 {
-                        self.clearance[i] = clear.max(0.0);
-                        self.clear_at[i] = *p;
-                        self.clear_vertex[i] = self.nearest[i];
-                    }
-                    break;
-                };
-                self.clearance[i] = 0.0;
-                *p = h.target;
-                // The contact keeps the first (deepest) test's depth and the last face and normal.
-                let depth = contact.map_or((-h.height).max(0.0), |c| c.1);
-                contact = Some((h.face, depth, h.normal));
-                if h.settled && k == 0 {
-                    break;
-                }
-            }
-            let Some((f, depth, n)) = contact else {
-                continue;
-            };
-            let bary = self.bary(f, p);
-            contacts.push(Contact {
-                point: i as u32,
-                face: f,
-                bary,
-                normal: n,
-                depth,
-                body_velocity: self.body.velocity_at(f as usize, bary),
-            });
+        let this = &*self;
+        let resolved: Vec<Option<resolve::Resolved>> = points
+            .par_iter()
+            .enumerate()
+            .with_min_len(PAR_CHUNK)
+            .map(|(i, p)| this.near_bounds(p).then(|| this.resolve_point(i, *p)))
+            .collect();
+        for (i, r) in resolved.into_iter().enumerate() {
+            let Some(r) = r else { continue };
+            points[i] = r.p;
+            self.nearest[i] = r.nearest;
+            self.nearest_more[i * k..(i + 1) * k].copy_from_slice(&r.more);
+            (self.clearance[i], self.clear_at[i], self.clear_vertex[i]) = r.clear;
+            contacts.extend(r.contact);
         }
     }
 
@@ -348,72 +318,25 @@ impl Collider for NearestVertexCollider {
                 .collect();
             self.probe_checked = points.iter().map(|p| (self.moves, *p)).collect();
         }
-        for &k in which {
-            let p = &points[k as usize];
-            if !self.near_bounds(p) {
-                out.push(Probe::FAR);
-                continue;
-            }
-            let mut checked = self.probe_checked[k as usize];
-            let v = self.follow_nearest(p, self.probe_nearest[k as usize], &mut checked);
-            self.probe_checked[k as usize] = checked;
+        // Each point on its own (in parallel), its cache entries written back in order.
+        let this = &*self;
+        let found: Vec<(Probe, u32, (u32, Vec3))> = which
+            .par_iter()
+            .with_min_len(PAR_CHUNK)
+            .map(|&k| {
+                let (k, p) = (k as usize, &points[k as usize]);
+                let mut checked = this.probe_checked[k];
+                if !this.near_bounds(p) {
+                    return (Probe::FAR, this.probe_nearest[k], checked);
+                }
+                let v = this.follow_nearest(p, this.probe_nearest[k], &mut checked);
+                (this.probe_at(p, v, reach), v, checked)
+            })
+            .collect();
+        for (&k, (probe, v, checked)) in which.iter().zip(found) {
             self.probe_nearest[k as usize] = v;
-            let mut closest_found: Option<(u32, Vec3)> = None;
-            let top = match self.fan_test(p, v) {
-                FanTest::Inside(f, h) => {
-                    out.push(Probe {
-                        distance: h,
-                        normal: self.body.face_normals[f as usize],
-                    });
-                    continue;
-                }
-                FanTest::Front(top, _) => top,
-                FanTest::Mixed(top) => {
-                    if !self.fan_is_convex(v) {
-                        match self.crease(p, v, 0.0) {
-                            Crease::Inside(h) => {
-                                out.push(Probe {
-                                    distance: h.height,
-                                    normal: h.normal,
-                                });
-                                continue;
-                            }
-                            // Outside: the crease test found the fan's closest point already.
-                            Crease::Outside { face, closest, .. } => {
-                                closest_found = Some((face, closest));
-                            }
-                            Crease::Unknown => {}
-                        }
-                    }
-                    top
-                }
-            };
-            // Over a convex fan the height over the highest plane bounds the distance from below,
-            // and is the distance when the point projects into that face.
-            if top.0 != u32::MAX
-                && self.fan_is_convex(v)
-                && (top.1 >= reach || self.projects_into(top.0, p))
-            {
-                out.push(Probe {
-                    distance: top.1,
-                    normal: self.body.face_normals[top.0 as usize],
-                });
-                continue;
-            }
-            let (f, q) = closest_found.unwrap_or_else(|| {
-                let (f, q, _) = self.body.closest_on_fan(p, v);
-                (f, q)
-            });
-            let d = p - q;
-            let n = d.norm();
-            out.push(Probe {
-                distance: n,
-                normal: if n > 1e-12 {
-                    d / n
-                } else {
-                    self.body.face_normals[f as usize]
-                },
-            });
+            self.probe_checked[k as usize] = checked;
+            out.push(probe);
         }
     }
 
