@@ -501,3 +501,50 @@ proptest! {
         }
     }
 }
+
+/// The tracker's probes and projection run each point on its own in parallel and write the
+/// results back in order: on a body with concave folds (where the fans' convexity cache, shared
+/// by the threads, is filled as points reach them), two rounds of probes and projections, with
+/// the points moved between, give bitwise the same on one thread as on three.
+#[test]
+fn the_tracker_probes_and_resolves_the_same_on_any_thread_count() {
+    let m = bumpy_sphere(4, 0.2, 4.0);
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let mut tracker = NearestVertexCollider::new(&m, 0.002).unwrap();
+            // 3,000 points within 3 cm of the surface on both sides: many chunks per thread.
+            let mut pts: Vec<Vec3> = (0..3000)
+                .map(|i| {
+                    let q = m.positions[(i * 7919) % m.positions.len()];
+                    let s = (i as Real * 0.37).sin();
+                    let c = (i as Real * 0.91).cos();
+                    q + Vec3::new(s, c, s * c) * 0.03
+                })
+                .collect();
+            let which: Vec<u32> = (0..pts.len() as u32).collect();
+            let (mut probes, mut contacts) = (Vec::new(), Vec::new());
+            let mut log = Vec::new();
+            for round in 0..2 {
+                tracker.probe_near(&pts, &which, 0.01, &mut probes);
+                log.push(format!("{probes:?}"));
+                contacts.clear();
+                tracker.resolve(&mut pts, &mut contacts);
+                log.push(format!("{contacts:?}"));
+                for (i, p) in pts.iter_mut().enumerate() {
+                    *p += Vec3::new(0.004, -0.003, 0.002) * ((i + round) as Real * 0.13).sin();
+                }
+            }
+            (pts, log)
+        })
+    };
+    let one = run(1);
+    // It did work: some points were inside and were pushed out.
+    assert!(one.1[1].len() > 100, "no contacts: {}", one.1[1]);
+    for threads in [2, 3] {
+        assert!(run(threads) == one, "{threads} threads differ from one");
+    }
+}

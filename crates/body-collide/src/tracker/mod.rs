@@ -106,7 +106,12 @@ impl ConvexCache {
 
 impl Clone for ConvexCache {
     fn clone(&self) -> Self {
-        ConvexCache(self.0.iter().map(|c| AtomicU8::new(c.load(Ordering::Relaxed))).collect())
+        ConvexCache(
+            self.0
+                .iter()
+                .map(|c| AtomicU8::new(c.load(Ordering::Relaxed)))
+                .collect(),
+        )
     }
 }
 
