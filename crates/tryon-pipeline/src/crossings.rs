@@ -36,6 +36,18 @@ struct Grid {
     cell: Real,
     /// (cell key, item), sorted.
     entries: Vec<(u64, u32)>,
+    /// Number of items (boxes).
+    items: usize,
+}
+
+/// One thread's scratch space for grid queries: the items found, the cells' keys, and a stamp
+/// per item marking the query that last found it (so each is listed once without sorting).
+#[derive(Default)]
+struct Scratch {
+    found: Vec<u32>,
+    keys: Vec<u64>,
+    seen: Vec<u32>,
+    stamp: u32,
 }
 
 fn key(c: [i64; 3]) -> u64 {
@@ -63,6 +75,7 @@ impl Grid {
         let mut g = Grid {
             cell,
             entries: Vec::new(),
+            items: boxes.len(),
         };
         let mut keys = Vec::new();
         for (i, (lo, hi)) in boxes.iter().enumerate() {
@@ -73,22 +86,27 @@ impl Grid {
         g
     }
 
-    /// Items whose cells meet the box, sorted, each once.
-    fn query(&self, lo: &Vec3, hi: &Vec3, out: &mut Vec<u32>) {
-        let mut keys = Vec::new();
-        self.cells(lo, hi, &mut keys);
-        out.clear();
-        for k in keys {
-            let start = self.entries.partition_point(|e| e.0 < k);
-            out.extend(
-                self.entries[start..]
-                    .iter()
-                    .take_while(|e| e.0 == k)
-                    .map(|e| e.1),
-            );
+    /// Items whose cells meet the box, each once, into `s.found` (in no particular order, the
+    /// same on every call).
+    fn query(&self, lo: &Vec3, hi: &Vec3, s: &mut Scratch) {
+        self.cells(lo, hi, &mut s.keys);
+        s.found.clear();
+        s.seen.resize(self.items, 0);
+        s.stamp = s.stamp.wrapping_add(1);
+        if s.stamp == 0 {
+            s.seen.fill(0);
+            s.stamp = 1;
         }
-        out.sort_unstable();
-        out.dedup();
+        for &k in &s.keys {
+            let start = self.entries.partition_point(|e| e.0 < k);
+            for &(_, item) in self.entries[start..].iter().take_while(|e| e.0 == k) {
+                let seen = &mut s.seen[item as usize];
+                if *seen != s.stamp {
+                    *seen = s.stamp;
+                    s.found.push(item);
+                }
+            }
+        }
     }
 }
 
@@ -129,7 +147,7 @@ pub fn judge(x: &[Vec3], tris: &[[u32; 3]]) -> ClothContact {
     match index(x, tris) {
         Some((boxes, grid)) => ClothContact {
             crossings: crossing_pairs(x, tris, &boxes, &grid).len(),
-            min_gap: min_gap(x, tris, &grid),
+            min_gap: min_gap(x, tris, &boxes, &grid),
         },
         None => ClothContact {
             crossings: 0,
@@ -173,10 +191,11 @@ fn crossing_pairs(
     (0..tris.len())
         .into_par_iter()
         .with_min_len(CHUNK)
-        .map_init(Vec::new, |found, i| {
+        .map_init(Scratch::default, |scratch, i| {
             let (lo, hi) = &boxes[i];
-            grid.query(lo, hi, found);
-            found
+            grid.query(lo, hi, scratch);
+            let mut pairs: Vec<[u32; 2]> = scratch
+                .found
                 .iter()
                 .filter(|&&j| (j as usize) > i)
                 .filter(|&&j| {
@@ -186,25 +205,30 @@ fn crossing_pairs(
                     !apart && !shares_vertex(a, b) && crossing(x, a, b)
                 })
                 .map(|&j| [i as u32, j])
-                .collect::<Vec<_>>()
+                .collect();
+            pairs.sort_unstable();
+            pairs
         })
         .flatten_iter()
         .collect()
 }
 
 /// The smallest vertex-face gap along the face's normal (see [`ClothContact::min_gap`]).
-fn min_gap(x: &[Vec3], tris: &[[u32; 3]], grid: &Grid) -> Real {
+fn min_gap(x: &[Vec3], tris: &[[u32; 3]], boxes: &[(Vec3, Vec3)], grid: &Grid) -> Real {
     let pad = Vec3::repeat(GAP_REACH);
     (0..x.len())
         .into_par_iter()
         .with_min_len(CHUNK)
-        .map_init(Vec::new, |found, v| {
+        .map_init(Scratch::default, |scratch, v| {
             let p = x[v];
-            grid.query(&(p - pad), &(p + pad), found);
+            grid.query(&(p - pad), &(p + pad), scratch);
             let mut best = GAP_REACH;
-            for &j in found.iter() {
+            for &j in scratch.found.iter() {
                 let t = &tris[j as usize];
-                if t.contains(&(v as u32)) {
+                // A triangle is no nearer than its box: one that far cannot lower `best`.
+                let (lo, hi) = &boxes[j as usize];
+                let outside = (lo - p).sup(&(p - hi)).sup(&Vec3::zeros());
+                if outside.norm_squared() >= best * best || t.contains(&(v as u32)) {
                     continue;
                 }
                 let tri = triangle(x, t);
