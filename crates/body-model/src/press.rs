@@ -9,6 +9,7 @@
 //! part whose normal opposes the vertex's own, with the vertex in front of it or at most
 //! [`DEEPEST`] behind (deeper, it is the part's far side).
 
+use rayon::prelude::*;
 use tryon_core::math::{Real, Vec3, vertex_normals};
 
 /// How far behind a facing part's surface a vertex may be and still be pressed out (m).
@@ -143,7 +144,7 @@ impl Press {
         vertex_normals(positions, triangles, &mut normals);
         // Only vertices of cells whose neighbourhood holds more than one part can press.
         let dims = grid.dims;
-        let moves: Vec<(usize, Vec3, Real)> = (0..grid.mask.len())
+        let candidates: Vec<usize> = (0..grid.mask.len())
             .filter(|&c| grid.mask[c] != 0)
             .filter(|&c| {
                 let at = [
@@ -157,7 +158,13 @@ impl Press {
                     > 1
             })
             .flat_map(|c| grid.items(c).iter().map(|&v| v as usize))
-            .filter_map(|v| self.overlap(v, positions, &normals, &grid))
+            .collect();
+        // Each candidate judged on its own, in parallel, the moves collected in order.
+        let x: &[Vec3] = positions;
+        let moves: Vec<(usize, Vec3, Real)> = candidates
+            .par_iter()
+            .with_min_len(64)
+            .filter_map(|&v| self.overlap(v, x, &normals, &grid))
             .collect();
         let mut out = Pressed::default();
         for (v, n, depth) in moves {

@@ -2,6 +2,7 @@
 //! pose into a deformed body frame (positions, and velocities by finite difference).
 
 use crate::press::{Press, Pressed};
+use rayon::prelude::*;
 use tryon_core::frames::BodyFrame;
 use tryon_core::math::{Mat3, Real, Vec3};
 use tryon_core::pose::{Pose, Skeleton};
@@ -136,7 +137,8 @@ impl SkinnedBody {
             .map(|j| pos[j] - rot[j] * self.joint_rest[j])
             .collect();
         out.clear();
-        out.extend(self.rest_positions.iter().enumerate().map(|(i, x)| {
+        // Each vertex on its own, in parallel (collected in order: the same on any thread count).
+        out.par_extend(self.rest_positions.par_iter().enumerate().map(|(i, x)| {
             let (js, ws) = (&self.skin.joints[i], &self.skin.weights[i]);
             let mut acc = Vec3::zeros();
             for k in 0..4 {
