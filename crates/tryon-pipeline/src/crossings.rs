@@ -8,6 +8,7 @@ use parry3d_f64::math::{Isometry, Point};
 use parry3d_f64::query::{PointQuery, intersection_test};
 use parry3d_f64::shape::Triangle;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicU64, Ordering};
 use tryon_core::math::{Real, Vec3};
 
 /// Farthest layer gap the referee looks for (m); a garment with no closer layers reads this.
@@ -16,6 +17,12 @@ pub const GAP_REACH: Real = 0.01;
 /// A layer gap is measured along the face's normal: the vertex's offset from its projection
 /// makes at least this cosine with the face normal (in-plane neighbours are not layers).
 const ALONG_NORMAL: Real = 0.9;
+
+/// Most grid cells a triangle's box spans along an axis.
+const MOST_CELLS: Real = 16.0;
+
+/// Smallest grid cell (m): a gap query's box (up to `2 GAP_REACH` wide) spans at most five a side.
+const MIN_CELL: Real = GAP_REACH / 2.0;
 
 /// Fewest triangles a thread takes at once.
 const CHUNK: usize = 64;
@@ -36,6 +43,9 @@ struct Grid {
     cell: Real,
     /// (cell key, item), sorted.
     entries: Vec<(u64, u32)>,
+    /// Open-addressed table of the occupied cells: (key, first entry, entry count); a slot with
+    /// count 0 is empty. Its length is a power of two.
+    table: Vec<(u64, u32, u32)>,
     /// Number of items (boxes).
     items: usize,
 }
@@ -75,6 +85,7 @@ impl Grid {
         let mut g = Grid {
             cell,
             entries: Vec::new(),
+            table: Vec::new(),
             items: boxes.len(),
         };
         let mut keys = Vec::new();
@@ -83,7 +94,26 @@ impl Grid {
             g.entries.extend(keys.iter().map(|&k| (k, i as u32)));
         }
         g.entries.sort_unstable();
+        let cells = g.entries.chunk_by(|a, b| a.0 == b.0).count();
+        g.table = vec![(0, 0, 0); (2 * cells).next_power_of_two().max(2)];
+        let mut start = 0;
+        for run in g.entries.chunk_by(|a, b| a.0 == b.0) {
+            let slot = g.slot(run[0].0);
+            g.table[slot] = (run[0].0, start as u32, run.len() as u32);
+            start += run.len();
+        }
         g
+    }
+
+    /// The table slot holding cell `key`, or the empty slot where it would go.
+    fn slot(&self, key: u64) -> usize {
+        let mask = self.table.len() - 1;
+        // The keys are already mixed: their high bits index the table.
+        let mut s = (key >> 32) as usize & mask;
+        while self.table[s].2 != 0 && self.table[s].0 != key {
+            s = (s + 1) & mask;
+        }
+        s
     }
 
     /// Items whose cells meet the box, each once, into `s.found` (in no particular order, the
@@ -98,8 +128,9 @@ impl Grid {
             s.stamp = 1;
         }
         for &k in &s.keys {
-            let start = self.entries.partition_point(|e| e.0 < k);
-            for &(_, item) in self.entries[start..].iter().take_while(|e| e.0 == k) {
+            let (_, start, count) = self.table[self.slot(k)];
+            let run = &self.entries[start as usize..(start + count) as usize];
+            for &(_, item) in run {
                 let seen = &mut s.seen[item as usize];
                 if *seen != s.stamp {
                     *seen = s.stamp;
@@ -175,7 +206,13 @@ fn index(x: &[Vec3], tris: &[[u32; 3]]) -> Option<(Vec<(Vec3, Vec3)>, Grid)> {
         .map(|t| (x[t[0] as usize] - x[t[1] as usize]).norm())
         .sum::<Real>()
         / tris.len() as Real;
-    let cell = (2.0 * mean_edge).max(GAP_REACH);
+    // Twice the mean edge, but no box spans more than `MOST_CELLS` cells a side (a stray long
+    // triangle, or a collapsed mesh, would list itself in millions).
+    let widest = boxes
+        .iter()
+        .map(|(lo, hi)| (hi - lo).max())
+        .fold(0.0, Real::max);
+    let cell = (2.0 * mean_edge).max(widest / MOST_CELLS).max(MIN_CELL);
     cell.is_finite().then(|| {
         let grid = Grid::new(&boxes, cell);
         (boxes, grid)
@@ -214,36 +251,61 @@ fn crossing_pairs(
 }
 
 /// The smallest vertex-face gap along the face's normal (see [`ClothContact::min_gap`]).
+///
+/// The answer is one number for the whole garment, so every vertex looks only as far as the
+/// smallest gap found so far by any thread (`bound`): a candidate no nearer than that cannot
+/// lower the minimum, so the result is the same whatever the order, and a layered garment's
+/// vertices query a box a few millimetres wide instead of two centimetres.
 fn min_gap(x: &[Vec3], tris: &[[u32; 3]], boxes: &[(Vec3, Vec3)], grid: &Grid) -> Real {
-    let pad = Vec3::repeat(GAP_REACH);
+    let bound = AtomicU64::new(GAP_REACH.to_bits());
     (0..x.len())
         .into_par_iter()
         .with_min_len(CHUNK)
-        .map_init(Scratch::default, |scratch, v| {
-            let p = x[v];
-            grid.query(&(p - pad), &(p + pad), scratch);
-            let mut best = GAP_REACH;
-            for &j in scratch.found.iter() {
-                let t = &tris[j as usize];
-                // A triangle is no nearer than its box: one that far cannot lower `best`.
-                let (lo, hi) = &boxes[j as usize];
-                let outside = (lo - p).sup(&(p - hi)).sup(&Vec3::zeros());
-                if outside.norm_squared() >= best * best || t.contains(&(v as u32)) {
-                    continue;
-                }
-                let tri = triangle(x, t);
-                let proj = tri.project_local_point(&Point::from(p), false);
-                let off = p - proj.point.coords;
-                let d = off.norm();
-                let n = tri.normal().map(|n| n.into_inner());
-                let along = n.is_some_and(|n| n.dot(&off).abs() >= ALONG_NORMAL * d);
-                if d < best && along {
-                    best = d;
-                }
+        .for_each_init(Scratch::default, |scratch, v| {
+            let reach = Real::from_bits(bound.load(Ordering::Relaxed));
+            let best = vertex_gap(x, tris, boxes, grid, v, reach, scratch);
+            if best < reach {
+                // Non-negative floats order as their bits do.
+                bound.fetch_min(best.to_bits(), Ordering::Relaxed);
             }
-            best
-        })
-        .reduce(|| GAP_REACH, Real::min)
+        });
+    Real::from_bits(bound.into_inner())
+}
+
+/// Vertex `v`'s smallest gap along a face's normal to a triangle not around it, if below `reach`
+/// (else `reach`).
+fn vertex_gap(
+    x: &[Vec3],
+    tris: &[[u32; 3]],
+    boxes: &[(Vec3, Vec3)],
+    grid: &Grid,
+    v: usize,
+    reach: Real,
+    scratch: &mut Scratch,
+) -> Real {
+    let p = x[v];
+    let pad = Vec3::repeat(reach);
+    grid.query(&(p - pad), &(p + pad), scratch);
+    let mut best = reach;
+    for &j in scratch.found.iter() {
+        let t = &tris[j as usize];
+        // A triangle is no nearer than its box: one that far cannot lower `best`.
+        let (lo, hi) = &boxes[j as usize];
+        let outside = (lo - p).sup(&(p - hi)).sup(&Vec3::zeros());
+        if outside.norm_squared() >= best * best || t.contains(&(v as u32)) {
+            continue;
+        }
+        let tri = triangle(x, t);
+        let proj = tri.project_local_point(&Point::from(p), false);
+        let off = p - proj.point.coords;
+        let d = off.norm();
+        let n = tri.normal().map(|n| n.into_inner());
+        let along = n.is_some_and(|n| n.dot(&off).abs() >= ALONG_NORMAL * d);
+        if d < best && along {
+            best = d;
+        }
+    }
+    best
 }
 
 #[cfg(test)]
@@ -308,6 +370,50 @@ mod tests {
             .count();
         assert!(j.crossings >= 6, "{j:?}");
         assert_eq!(j.crossings, brute);
+    }
+
+    /// The smallest gap by brute force: every vertex against every triangle not around it, the
+    /// offset from parry's nearest point within 26 degrees of the triangle's normal.
+    fn brute_gap(x: &[Vec3], t: &[[u32; 3]]) -> Real {
+        let mut best = GAP_REACH;
+        for (v, p) in x.iter().enumerate() {
+            for tri in t.iter().filter(|tri| !tri.contains(&(v as u32))) {
+                let tr = triangle(x, tri);
+                let q = tr.project_local_point(&Point::from(*p), false).point.coords;
+                let (off, n) = (p - q, tr.normal().unwrap().into_inner());
+                if n.dot(&off).abs() >= ALONG_NORMAL * off.norm() {
+                    best = best.min(off.norm());
+                }
+            }
+        }
+        best
+    }
+
+    #[test]
+    fn the_smallest_gap_is_the_brute_force_one_on_any_thread_count() {
+        // Two wavy sheets a few millimetres apart, the upper one dented toward the lower in a
+        // few places, so the smallest gap sits at one vertex somewhere in the middle.
+        let (mut x, mut t) = sheet(12, 0.01, 0.0, 0);
+        let n = x.len() as u32;
+        let (x2, t2) = sheet(12, 0.01, 0.006, n);
+        x.extend(x2);
+        t.extend(t2);
+        for (k, p) in x.iter_mut().enumerate() {
+            p.z += 0.001 * ((k as Real) * 0.7).sin();
+        }
+        for (k, dent) in [(40, 0.0031), (97, 0.0042), (130, 0.0027)] {
+            x[n as usize + k].z -= dent;
+        }
+        let want = brute_gap(&x, &t);
+        assert!(want < 0.004 && want > 0.0, "{want}");
+        for threads in [1, 2, 3] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let got = pool.install(|| judge(&x, &t));
+            assert_eq!(got.min_gap, want, "{threads} threads");
+        }
     }
 
     #[test]
