@@ -10,10 +10,14 @@ use parry3d_f64::bounding_volume::Aabb;
 use parry3d_f64::math::Point;
 use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy};
 use parry3d_f64::query::PointQuery;
+use rayon::prelude::*;
 use tryon_core::frames::{BodyFrame, Contact};
 use tryon_core::math::{Real, Vec3, closest_point_on_triangle, is_finite};
 use tryon_core::mesh::PolyMesh;
 use tryon_core::stages::{Collider, Probe};
+
+/// Fewest points a thread probes at once.
+const PAR_CHUNK: usize = 64;
 
 /// A face's neighbour across a border edge.
 const NONE: u32 = u32::MAX;
@@ -221,21 +225,26 @@ impl Collider for ExactCollider {
     }
 
     fn probe(&mut self, points: &[Vec3], which: &[u32], out: &mut Vec<Probe>) {
-        out.clear();
-        for &k in which {
-            let p = points[k as usize];
-            out.push(match self.project(&p) {
-                Some(pr) => Probe {
-                    distance: pr.distance,
-                    normal: if pr.distance.abs() > 1e-12 {
-                        (p - pr.point) / pr.distance
-                    } else {
-                        self.body.face_normals[pr.face as usize]
+        // Each point on its own, in parallel, collected in order.
+        let this = &*self;
+        which
+            .par_iter()
+            .with_min_len(PAR_CHUNK)
+            .map(|&k| {
+                let p = points[k as usize];
+                match this.project(&p) {
+                    Some(pr) => Probe {
+                        distance: pr.distance,
+                        normal: if pr.distance.abs() > 1e-12 {
+                            (p - pr.point) / pr.distance
+                        } else {
+                            this.body.face_normals[pr.face as usize]
+                        },
                     },
-                },
-                None => Probe::FAR,
-            });
-        }
+                    None => Probe::FAR,
+                }
+            })
+            .collect_into_vec(out);
     }
 }
 

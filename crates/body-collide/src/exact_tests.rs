@@ -155,3 +155,35 @@ fn a_body_frame_with_a_non_finite_vertex_is_no_panic() {
     tracker.sweep(&start, &mut end, [0.0, 1.0], &mut contacts);
     assert!(end.iter().all(|p| p.iter().all(|c| c.is_finite())));
 }
+
+#[test]
+fn probes_are_the_signed_distances_on_any_thread_count() {
+    let body = bumpy(3, 0.15, 5.0);
+    let mut exact = ExactCollider::new(&body, 0.002).unwrap();
+    // Points on rays through the body: inside, on and outside its rippled surface.
+    let points: Vec<Vec3> = (0..500)
+        .map(|k| {
+            let a = k as Real * 0.731;
+            let dir = Vec3::new(a.cos() * (0.3 * a).sin(), (0.3 * a).cos(), a.sin()).normalize();
+            dir * (0.2 + 0.0007 * k as Real)
+        })
+        .collect();
+    let which: Vec<u32> = (0..points.len() as u32).rev().step_by(2).collect();
+    let mut per_thread = Vec::new();
+    for threads in [1, 2, 3] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let mut out = Vec::new();
+        pool.install(|| exact.probe(&points, &which, &mut out));
+        per_thread.push(out);
+    }
+    for (k, &i) in which.iter().enumerate() {
+        let want = parry_distance(&body.positions, &exact.body.triangles, &points[i as usize]);
+        assert!((per_thread[0][k].distance - want).abs() < 1e-9, "point {i}");
+        for out in &per_thread[1..] {
+            assert_eq!(out[k], per_thread[0][k], "point {i}");
+        }
+    }
+}
