@@ -4,8 +4,14 @@
 //! every other collider. The hierarchy is built once and refitted to each new shape (its leaves'
 //! boxes updated, its tree kept): rebuilding it every frame was a fifth of the demo's wall time.
 //! Its answers are checked against parry's own oriented `TriMesh` queries (tests).
+//!
+//! As a scene's collider (`body_collision = "exact"`) it also gives the swept test
+//! ([`Collider::sweep`], the same [`SweptBody`] as the nearest-vertex collider's), so a particle a
+//! fast limb would carry through is stopped. It has no pinch search (`probe_opposite`): one was
+//! built and measured, and it stretched the real garments more (docs/decisions.md, session 44).
 
 use crate::body::{BodyError, BodyMesh};
+use crate::swept::SweptBody;
 use parry3d_f64::bounding_volume::Aabb;
 use parry3d_f64::math::Point;
 use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy};
@@ -33,6 +39,8 @@ pub struct ExactCollider {
     across: Vec<[u32; 3]>,
     /// Angle-weighted pseudo-normal of each vertex for the current shape (not unit).
     vertex_normals: Vec<Vec3>,
+    /// The body's last move, for the swept test.
+    swept: SweptBody,
 }
 
 impl std::fmt::Debug for ExactCollider {
@@ -99,6 +107,7 @@ impl ExactCollider {
             bvh: Bvh::from_leaves(BvhBuildStrategy::Binned, &boxes),
             across: neighbours(&body.triangles),
             vertex_normals: Vec::new(),
+            swept: SweptBody::default(),
             body,
             thickness,
         };
@@ -181,6 +190,10 @@ impl Collider for ExactCollider {
     }
 
     fn update(&mut self, frame: &BodyFrame) {
+        if frame.positions.len() == self.body.positions.len() {
+            let still = frame.positions == self.body.positions;
+            self.swept.moved(&self.body.positions, still);
+        }
         if self.body.set_frame(frame).is_err() {
             return;
         }
@@ -222,6 +235,20 @@ impl Collider for ExactCollider {
 
     fn signed_distance(&self, p: &Vec3) -> Option<Real> {
         self.project(p).map(|pr| pr.distance)
+    }
+
+    /// The swept test of [`SweptBody`] against the body's last move.
+    fn sweep(
+        &mut self,
+        start: &[Vec3],
+        end: &mut [Vec3],
+        span: [Real; 2],
+        contacts: &mut Vec<Contact>,
+    ) -> bool {
+        let skin = self.thickness;
+        self.swept
+            .sweep(&self.body, start, end, span, skin, contacts);
+        true
     }
 
     fn probe(&mut self, points: &[Vec3], which: &[u32], out: &mut Vec<Probe>) {

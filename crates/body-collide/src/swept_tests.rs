@@ -161,3 +161,32 @@ fn the_sweep_is_the_same_on_any_thread_count() {
     assert_eq!(one, run(2));
     assert_eq!(one, run(3));
 }
+
+#[test]
+fn the_exact_collider_sweeps_a_moving_part_as_the_tracker_does() {
+    // The ball of the test above, its move swept by both colliders: the same stop.
+    let mesh = icosphere(0.03, 2, Vec3::zeros());
+    let up = Vec3::new(0.0, 0.0, 0.2);
+    let frame = BodyFrame {
+        time: 0.1,
+        positions: mesh.positions.iter().map(|p| p + up).collect(),
+        velocities: Vec::new(),
+    };
+    let mut tracker = NearestVertexCollider::new(&mesh, SKIN).expect("icosphere");
+    let mut exact = ExactCollider::new(&mesh, SKIN).expect("icosphere");
+    let start = [Vec3::new(0.0, 0.0, 0.05)];
+    let mut ends = Vec::new();
+    for c in [&mut tracker as &mut dyn Collider, &mut exact] {
+        c.update(&frame);
+        let (mut end, mut contacts) = (start, Vec::new());
+        assert!(
+            c.sweep(&start, &mut end, [0.0, 1.0], &mut contacts),
+            "{}",
+            c.name()
+        );
+        assert_eq!(contacts.len(), 1, "{}", c.name());
+        ends.push(end[0]);
+    }
+    assert_eq!(ends[0], ends[1]);
+    assert!(exact.signed_distance(&ends[1]).unwrap() > 0.0 && ends[1].z > 0.2);
+}
