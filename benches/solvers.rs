@@ -1,7 +1,8 @@
 //! Criterion benchmarks of the garment solvers' cloth step alone (`ClothSolver::step_frame`), on one
 //! thread and on two: VBD on the drape at N = 64 and 128 (plain, with its strain limit at rest
 //! length, and with the cloth's contact with itself), and on the MakeHuman walk (plain, with
-//! hinges, pokes, or self-contact; skipped when
+//! the nearest-vertex collider instead of the scene's exact one, with hinges, pokes, or
+//! self-contact; skipped when
 //! the shared assets are absent). Each scene is run untimed to a frame in contact (the drape after
 //! 1 s, the walk at frame 30); every timed iteration then steps that same frame from the same cloth
 //! and solver state against the same body, so one and two threads do the same work. The VBD sweep gives the
@@ -49,7 +50,7 @@ fn cloth_step(c: &mut Criterion) {
         .sample_size(10)
         .warm_up_time(Duration::from_secs(1))
         .measurement_time(Duration::from_secs(4));
-    let cases: [(&str, &str, &[&str], usize); 14] = [
+    let cases: [(&str, &str, &[&str], usize); 15] = [
         (
             "vbd_drape_64",
             "drape-sphere.toml",
@@ -82,7 +83,14 @@ fn cloth_step(c: &mut Criterion) {
             ],
             60,
         ),
+        // The scene's own collider (exact, with the swept test) and P1's nearest-vertex one.
         ("vbd_makehuman_walk", "makehuman-dress-walk.toml", &[], 30),
+        (
+            "vbd_makehuman_walk_tracker",
+            "makehuman-dress-walk.toml",
+            &["effects.body_collision=\"nearest_vertex\""],
+            30,
+        ),
         (
             "vbd_makehuman_walk_dihedral",
             "makehuman-dress-walk.toml",

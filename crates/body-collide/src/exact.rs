@@ -25,8 +25,8 @@ use tryon_core::stages::{Collider, Probe};
 /// Fewest points a thread probes at once.
 const PAR_CHUNK: usize = 64;
 
-/// A face's neighbour across a border edge.
-const NONE: u32 = u32::MAX;
+/// No face: a border edge's missing neighbour, or no starting face for [`ExactCollider::project_from`].
+pub const NONE: u32 = u32::MAX;
 
 /// Exact point-mesh collider (the referee).
 #[derive(Clone)]
@@ -41,6 +41,8 @@ pub struct ExactCollider {
     vertex_normals: Vec<Vec3>,
     /// The body's last move, for the swept test.
     swept: SweptBody,
+    /// Per probed point, the face found for it last time ([`NONE`] before the first).
+    hints: Vec<u32>,
 }
 
 impl std::fmt::Debug for ExactCollider {
@@ -108,6 +110,7 @@ impl ExactCollider {
             across: neighbours(&body.triangles),
             vertex_normals: Vec::new(),
             swept: SweptBody::default(),
+            hints: Vec::new(),
             body,
             thickness,
         };
@@ -157,22 +160,33 @@ impl ExactCollider {
     /// Closest point on the body surface and signed distance (`None` for a non-finite point or
     /// a body with no triangle).
     pub fn project(&self, p: &Vec3) -> Option<Projection> {
+        self.project_from(p, NONE)
+    }
+
+    /// [`ExactCollider::project`] starting from face `hint` (a face near `p`, such as the one
+    /// found for it last time, or [`NONE`]): the hierarchy is searched only for faces nearer than
+    /// that one, which is much of the search when the point has hardly moved.
+    pub fn project_from(&self, p: &Vec3, hint: u32) -> Option<Projection> {
         if !is_finite(p) {
             return None;
         }
         let point = Point::from(*p);
-        let (face, (d2, (q, bary))) = self.bvh.find_best(
-            Real::INFINITY,
+        let closest = |f: u32| {
+            let [a, b, c] = self.body.corners(f as usize);
+            let (q, w) = closest_point_on_triangle(p, &a, &b, &c);
+            ((q - p).norm_squared(), (q, w))
+        };
+        let start = ((hint as usize) < self.body.triangles.len()).then(|| (hint, closest(hint)));
+        let bound = start.map_or(Real::INFINITY, |(_, (d2, _))| d2);
+        let found = self.bvh.find_best(
+            bound,
             |node, _| {
                 let d = node.aabb().distance_to_local_point(&point, true);
                 d * d
             },
-            |f, _| {
-                let [a, b, c] = self.body.corners(f as usize);
-                let (q, w) = closest_point_on_triangle(p, &a, &b, &c);
-                Some(((q - p).norm_squared(), (q, w)))
-            },
-        )?;
+            |f, _| Some(closest(f)),
+        );
+        let (face, (d2, (q, bary))) = found.or(start)?;
         let d = d2.sqrt();
         let inside = d > 0.0 && (p - q).dot(&self.pseudo_normal(face, bary)) < 0.0;
         Some(Projection {
@@ -252,26 +266,39 @@ impl Collider for ExactCollider {
     }
 
     fn probe(&mut self, points: &[Vec3], which: &[u32], out: &mut Vec<Probe>) {
-        // Each point on its own, in parallel, collected in order.
+        // Each point on its own, in parallel, from the face found for it last time; collected
+        // in order, and the faces kept for next time.
+        if self.hints.len() != points.len() {
+            self.hints.clear();
+            self.hints.resize(points.len(), NONE);
+        }
         let this = &*self;
-        which
+        let found: Vec<(Probe, u32)> = which
             .par_iter()
             .with_min_len(PAR_CHUNK)
             .map(|&k| {
                 let p = points[k as usize];
-                match this.project(&p) {
-                    Some(pr) => Probe {
-                        distance: pr.distance,
-                        normal: if pr.distance.abs() > 1e-12 {
-                            (p - pr.point) / pr.distance
-                        } else {
-                            this.body.face_normals[pr.face as usize]
+                match this.project_from(&p, this.hints[k as usize]) {
+                    Some(pr) => (
+                        Probe {
+                            distance: pr.distance,
+                            normal: if pr.distance.abs() > 1e-12 {
+                                (p - pr.point) / pr.distance
+                            } else {
+                                this.body.face_normals[pr.face as usize]
+                            },
                         },
-                    },
-                    None => Probe::FAR,
+                        pr.face,
+                    ),
+                    None => (Probe::FAR, NONE),
                 }
             })
-            .collect_into_vec(out);
+            .collect();
+        out.clear();
+        for (&k, (probe, face)) in which.iter().zip(found) {
+            self.hints[k as usize] = face;
+            out.push(probe);
+        }
     }
 }
 

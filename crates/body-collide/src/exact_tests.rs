@@ -187,3 +187,28 @@ fn probes_are_the_signed_distances_on_any_thread_count() {
         }
     }
 }
+
+#[test]
+fn a_projection_started_from_any_face_finds_the_same_nearest_point() {
+    let body = bumpy(3, 0.15, 5.0);
+    let exact = ExactCollider::new(&body, 0.002).unwrap();
+    let faces = exact.body.triangles.len() as u32;
+    for k in 0..200 {
+        let a = k as Real * 1.37;
+        let dir = Vec3::new(a.sin() * (0.5 * a).cos(), (0.5 * a).sin(), a.cos()).normalize();
+        let p = dir * (0.25 + 0.001 * k as Real);
+        let plain = exact.project(&p).unwrap();
+        // Some other face, the right one, and no face.
+        for hint in [(k * 97) % faces, plain.face, crate::exact::NONE] {
+            let from = exact.project_from(&p, hint).unwrap();
+            assert!(
+                (from.distance - plain.distance).abs() < 1e-12,
+                "point {k}, hint {hint}"
+            );
+            assert!(
+                (from.point - plain.point).norm() < 1e-12,
+                "point {k}, hint {hint}"
+            );
+        }
+    }
+}
