@@ -176,7 +176,10 @@ impl ExactCollider {
             let (q, w) = closest_point_on_triangle(p, &a, &b, &c);
             ((q - p).norm_squared(), (q, w))
         };
-        let start = ((hint as usize) < self.body.triangles.len()).then(|| (hint, closest(hint)));
+        // A hint that gives no finite distance (a face collapsed by the pose) is no start.
+        let start = ((hint as usize) < self.body.triangles.len())
+            .then(|| (hint, closest(hint)))
+            .filter(|(_, (d2, _))| d2.is_finite());
         let bound = start.map_or(Real::INFINITY, |(_, (d2, _))| d2);
         let found = self.bvh.find_best(
             bound,
