@@ -331,12 +331,19 @@ mod tests {
         (x, t)
     }
 
-    #[test]
-    fn two_parallel_sheets_do_not_cross_and_their_gap_is_their_distance() {
-        let (mut x, mut t) = sheet(6, 0.02, 0.0, 0);
-        let (x2, t2) = sheet(6, 0.02, 0.003, x.len() as u32);
+    /// Two such sheets, the second `gap` above the first; with the first sheet's vertex count.
+    fn two_sheets(n: u32, s: Real, gap: Real) -> (Vec<Vec3>, Vec<[u32; 3]>, u32) {
+        let (mut x, mut t) = sheet(n, s, 0.0, 0);
+        let first = x.len() as u32;
+        let (x2, t2) = sheet(n, s, gap, first);
         x.extend(x2);
         t.extend(t2);
+        (x, t, first)
+    }
+
+    #[test]
+    fn two_parallel_sheets_do_not_cross_and_their_gap_is_their_distance() {
+        let (x, t, _) = two_sheets(6, 0.02, 0.003);
         let j = judge(&x, &t);
         assert_eq!(j.crossings, 0);
         assert!((j.min_gap - 0.003).abs() < 1e-9, "{j:?}");
@@ -347,11 +354,7 @@ mod tests {
 
     #[test]
     fn a_vertex_pushed_through_the_other_sheet_makes_its_triangles_cross() {
-        let (mut x, mut t) = sheet(4, 0.02, 0.0, 0);
-        let n = x.len() as u32;
-        let (x2, t2) = sheet(4, 0.02, 0.003, n);
-        x.extend(x2);
-        t.extend(t2);
+        let (mut x, t, n) = two_sheets(4, 0.02, 0.003);
         // Vertex (2, 2) of the upper sheet goes 2 mm below the lower one: its six triangles
         // each pass through the lower sheet.
         let v = (n + 2 * 5 + 2) as usize;
@@ -393,11 +396,7 @@ mod tests {
     fn the_smallest_gap_is_the_brute_force_one_on_any_thread_count() {
         // Two wavy sheets a few millimetres apart, the upper one dented toward the lower in a
         // few places, so the smallest gap sits at one vertex somewhere in the middle.
-        let (mut x, mut t) = sheet(12, 0.01, 0.0, 0);
-        let n = x.len() as u32;
-        let (x2, t2) = sheet(12, 0.01, 0.006, n);
-        x.extend(x2);
-        t.extend(t2);
+        let (mut x, t, n) = two_sheets(12, 0.01, 0.006);
         for (k, p) in x.iter_mut().enumerate() {
             p.z += 0.001 * ((k as Real) * 0.7).sin();
         }
