@@ -5,6 +5,13 @@
 //! boxes updated, its tree kept): rebuilding it every frame was a fifth of the demo's wall time.
 //! Its answers are checked against parry's own oriented `TriMesh` queries (tests).
 //!
+//! Queries over a point set (`probe`, `resolve`, `signed_distances`) run in parallel and remember
+//! what they found: a point asked again where it was, on the same shape of the body, gets the same
+//! answer without a search, and any other point starts its search from the face found for it last
+//! time. A nearest point on an edge is always taken from the edge's face of lower index, so an
+//! answer does not depend on where its search started, to the last bit (test
+//! `a_nearest_point_on_an_edge_is_the_same_bits_from_any_starting_face`).
+//!
 //! As a scene's collider (`body_collision = "exact"`) it also gives the swept test
 //! ([`Collider::sweep`], the same [`SweptBody`] as the nearest-vertex collider's), so a particle a
 //! fast limb would carry through is stopped. It has no pinch search (`probe_opposite`): one was
@@ -28,6 +35,32 @@ const PAR_CHUNK: usize = 64;
 /// No face: a border edge's missing neighbour, or no starting face for [`ExactCollider::project_from`].
 pub const NONE: u32 = u32::MAX;
 
+/// What was found is kept for this many point sets (told apart by their length): a scene probes
+/// its coarse particles and its fine vertices in turn, and each keeps its own.
+const MEMO_SETS: usize = 4;
+
+/// What was found for the points of one set: per point, where it was queried, on which shape of
+/// the body ([`ExactCollider::shape`]), and the projection. A point queried again where it was,
+/// on the same shape, gets the same answer without a search (the cloth solver probes its
+/// particles where the last step's fail-safe left them); any other starts its search from the
+/// face found last time.
+#[derive(Clone, Default)]
+struct Memo {
+    at: Vec<Vec3>,
+    shape: Vec<u64>,
+    found: Vec<Option<Projection>>,
+}
+
+impl Memo {
+    fn new(n: usize) -> Self {
+        Memo {
+            at: vec![Vec3::repeat(Real::NAN); n],
+            shape: vec![u64::MAX; n],
+            found: vec![None; n],
+        }
+    }
+}
+
 /// Exact point-mesh collider (the referee).
 #[derive(Clone)]
 pub struct ExactCollider {
@@ -41,8 +74,10 @@ pub struct ExactCollider {
     vertex_normals: Vec<Vec3>,
     /// The body's last move, for the swept test.
     swept: SweptBody,
-    /// Per probed point, the face found for it last time ([`NONE`] before the first).
-    hints: Vec<u32>,
+    /// What was found for recent point sets.
+    memos: Vec<Memo>,
+    /// Counts the body's changes of shape.
+    shape: u64,
 }
 
 impl std::fmt::Debug for ExactCollider {
@@ -62,6 +97,9 @@ pub struct Projection {
     pub face: u32,
     pub bary: [Real; 3],
 }
+
+/// A face's nearest point to a query: squared distance, the point, its barycentric coordinates.
+type Nearest = (Real, (Vec3, [Real; 3]));
 
 /// The box of a triangle (empty for non-finite corners, so it is never visited).
 fn triangle_box([a, b, c]: [Vec3; 3]) -> Aabb {
@@ -110,7 +148,8 @@ impl ExactCollider {
             across: neighbours(&body.triangles),
             vertex_normals: Vec::new(),
             swept: SweptBody::default(),
-            hints: Vec::new(),
+            memos: Vec::new(),
+            shape: 0,
             body,
             thickness,
         };
@@ -118,19 +157,26 @@ impl ExactCollider {
         Ok(c)
     }
 
-    /// The vertices' angle-weighted pseudo-normals for the current shape.
+    /// The vertices' angle-weighted pseudo-normals for the current shape: each face's corner
+    /// angles found in parallel, summed into the vertices in face order (the same sums on any
+    /// thread count).
     fn pseudo_normals(&mut self) {
+        let body = &self.body;
+        let angles: Vec<[Real; 3]> = (0..body.triangles.len())
+            .into_par_iter()
+            .with_min_len(PAR_CHUNK * 4)
+            .map(|f| {
+                let c = body.corners(f);
+                std::array::from_fn(|k| (c[(k + 1) % 3] - c[k]).angle(&(c[(k + 2) % 3] - c[k])))
+            })
+            .collect();
         let n = &mut self.vertex_normals;
         n.clear();
-        n.resize(self.body.positions.len(), Vec3::zeros());
-        for (f, t) in self.body.triangles.iter().enumerate() {
-            let c = self.body.corners(f);
-            let normal = self.body.face_normals[f];
+        n.resize(body.positions.len(), Vec3::zeros());
+        for ((t, normal), angle) in body.triangles.iter().zip(&body.face_normals).zip(angles) {
             for k in 0..3 {
-                let (u, v) = (c[(k + 1) % 3] - c[k], c[(k + 2) % 3] - c[k]);
-                let angle = u.angle(&v);
-                if angle.is_finite() {
-                    n[t[k] as usize] += normal * angle;
+                if angle[k].is_finite() {
+                    n[t[k] as usize] += normal * angle[k];
                 }
             }
         }
@@ -154,6 +200,35 @@ impl ExactCollider {
                 }
             }
             _ => normal,
+        }
+    }
+
+    /// A nearest point on an edge is found on either face of the edge, by rounding at slightly
+    /// different places; it is always taken from the face of lower index, so the answer does not
+    /// depend on where the search started or on the hierarchy's order. (On a corner the point
+    /// is the vertex itself, whichever face found it.)
+    fn on_lower_face(
+        &self,
+        face: u32,
+        found: Nearest,
+        closest: impl Fn(u32) -> Nearest,
+    ) -> (u32, Nearest) {
+        let bary = found.1.1;
+        let on = bary.map(|b| b > 0.0);
+        if on.iter().filter(|&&b| b).count() != 2 {
+            return (face, found);
+        }
+        let off = on.iter().position(|&b| !b).unwrap_or(0);
+        match self.across[face as usize][(off + 1) % 3] {
+            g if g != NONE && g < face => {
+                let other = closest(g);
+                if other.0.is_finite() {
+                    (g, other)
+                } else {
+                    (face, found)
+                }
+            }
+            _ => (face, found),
         }
     }
 
@@ -190,6 +265,7 @@ impl ExactCollider {
             |f, _| Some(closest(f)),
         );
         let (face, (d2, (q, bary))) = found.or(start)?;
+        let (face, (d2, (q, bary))) = self.on_lower_face(face, (d2, (q, bary)), closest);
         let d = d2.sqrt();
         let inside = d > 0.0 && (p - q).dot(&self.pseudo_normal(face, bary)) < 0.0;
         Some(Projection {
@@ -198,6 +274,70 @@ impl ExactCollider {
             face,
             bary,
         })
+    }
+}
+
+impl ExactCollider {
+    /// The memo of point sets of `n` points, taken out (put back with `put_memo`); a new set
+    /// has none, and the oldest is dropped when [`MEMO_SETS`] are kept.
+    fn take_memo(&mut self, n: usize) -> Memo {
+        match self.memos.iter().position(|m| m.at.len() == n) {
+            Some(k) => self.memos.remove(k),
+            None => Memo::new(n),
+        }
+    }
+
+    fn put_memo(&mut self, memo: Memo) {
+        if self.memos.len() >= MEMO_SETS {
+            self.memos.remove(0);
+        }
+        self.memos.push(memo);
+    }
+
+    /// Each listed point's projection (all points for `None`), in parallel: the memo's answer for
+    /// a point queried at the same place on the same shape, else a search from the face found
+    /// for it last time (the same answer from any start, to the bit: `on_lower_face`).
+    fn project_all(&mut self, points: &[Vec3], which: Option<&[u32]>) -> Vec<Option<Projection>> {
+        let mut memo = self.take_memo(points.len());
+        let (this, m) = (&*self, &memo);
+        let one = |k: usize| {
+            let p = &points[k];
+            let same =
+                m.shape[k] == this.shape && (0..3).all(|a| p[a].to_bits() == m.at[k][a].to_bits());
+            if same {
+                m.found[k]
+            } else {
+                this.project_from(p, m.found[k].map_or(NONE, |f| f.face))
+            }
+        };
+        let found: Vec<Option<Projection>> = match which {
+            Some(w) => w
+                .par_iter()
+                .with_min_len(PAR_CHUNK)
+                .map(|&k| one(k as usize))
+                .collect(),
+            None => (0..points.len())
+                .into_par_iter()
+                .with_min_len(PAR_CHUNK)
+                .map(one)
+                .collect(),
+        };
+        for (j, pr) in found.iter().enumerate() {
+            let k = which.map_or(j, |w| w[j] as usize);
+            (memo.at[k], memo.shape[k], memo.found[k]) = (points[k], self.shape, *pr);
+        }
+        self.put_memo(memo);
+        found
+    }
+
+    /// Signed distances of all `points` (`None` where there is none), as
+    /// [`Collider::signed_distance`] gives them, found from the faces of the last call for a set
+    /// of this length: the referee's per-frame query.
+    pub fn signed_distances(&mut self, points: &[Vec3]) -> Vec<Option<Real>> {
+        self.project_all(points, None)
+            .into_iter()
+            .map(|pr| pr.map(|pr| pr.distance))
+            .collect()
     }
 }
 
@@ -211,6 +351,8 @@ impl Collider for ExactCollider {
             let still = frame.positions == self.body.positions;
             self.swept.moved(&self.body.positions, still);
         }
+        // A new shape, even if taking it fails part-way: nothing found before is reused.
+        self.shape += 1;
         if self.body.set_frame(frame).is_err() {
             return;
         }
@@ -223,8 +365,9 @@ impl Collider for ExactCollider {
     }
 
     fn resolve(&mut self, points: &mut [Vec3], contacts: &mut Vec<Contact>) {
-        for (i, p) in points.iter_mut().enumerate() {
-            let Some(pr) = self.project(p) else {
+        let found = self.project_all(points, None);
+        for (i, (p, pr)) in points.iter_mut().zip(found).enumerate() {
+            let Some(pr) = pr else {
                 continue;
             };
             if pr.distance >= self.thickness {
@@ -271,37 +414,19 @@ impl Collider for ExactCollider {
     fn probe(&mut self, points: &[Vec3], which: &[u32], out: &mut Vec<Probe>) {
         // Each point on its own, in parallel, from the face found for it last time; collected
         // in order, and the faces kept for next time.
-        if self.hints.len() != points.len() {
-            self.hints.clear();
-            self.hints.resize(points.len(), NONE);
-        }
-        let this = &*self;
-        let found: Vec<(Probe, u32)> = which
-            .par_iter()
-            .with_min_len(PAR_CHUNK)
-            .map(|&k| {
-                let p = points[k as usize];
-                match this.project_from(&p, this.hints[k as usize]) {
-                    Some(pr) => (
-                        Probe {
-                            distance: pr.distance,
-                            normal: if pr.distance.abs() > 1e-12 {
-                                (p - pr.point) / pr.distance
-                            } else {
-                                this.body.face_normals[pr.face as usize]
-                            },
-                        },
-                        pr.face,
-                    ),
-                    None => (Probe::FAR, NONE),
-                }
-            })
-            .collect();
+        let found = self.project_all(points, Some(which));
         out.clear();
-        for (&k, (probe, face)) in which.iter().zip(found) {
-            self.hints[k as usize] = face;
-            out.push(probe);
-        }
+        out.extend(which.iter().zip(found).map(|(&k, pr)| match pr {
+            Some(pr) => Probe {
+                distance: pr.distance,
+                normal: if pr.distance.abs() > 1e-12 {
+                    (points[k as usize] - pr.point) / pr.distance
+                } else {
+                    self.body.face_normals[pr.face as usize]
+                },
+            },
+            None => Probe::FAR,
+        }));
     }
 }
 

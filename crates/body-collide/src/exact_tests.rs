@@ -212,3 +212,81 @@ fn a_projection_started_from_any_face_finds_the_same_nearest_point() {
         }
     }
 }
+
+#[test]
+fn a_nearest_point_on_an_edge_is_the_same_bits_from_any_starting_face() {
+    // Points off the middle of every edge (and off every corner) of a bumpy body, where the
+    // nearest point lies on an edge shared by two faces: the answer must not depend on the face
+    // the search starts from, to the last bit, or a run's result would depend on its history.
+    let body = bumpy(2, 0.15, 4.0);
+    let exact = ExactCollider::new(&body, 0.002).unwrap();
+    let (x, tris) = (&exact.body.positions, &exact.body.triangles);
+    let faces = tris.len() as u32;
+    let mut on_edges = 0;
+    for (f, t) in tris.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (x[t[k] as usize], x[t[(k + 1) % 3] as usize]);
+            // Out along the edge's normal and the corner's, nudged off the body's symmetry
+            // planes (mirrored faces would tie at two different points).
+            let n = exact.body.face_normals[f];
+            let nudge = Vec3::new((f as Real).sin(), (k as Real + 0.5).cos(), 0.3) * 1e-7;
+            for p in [
+                (a + b) * 0.5 + n * 0.004,
+                a + n * 0.003,
+                (a * 0.3 + b * 0.7) + n * 0.002,
+            ] {
+                let p = p + nudge;
+                let plain = exact.project(&p).unwrap();
+                on_edges += usize::from(plain.bary.iter().filter(|&&w| w > 0.0).count() == 2);
+                for hint in [f as u32, (f as u32 * 97 + 13) % faces, crate::exact::NONE] {
+                    let from = exact.project_from(&p, hint).unwrap();
+                    assert_eq!(
+                        from.distance.to_bits(),
+                        plain.distance.to_bits(),
+                        "face {f}"
+                    );
+                    let same = (0..3).all(|i| from.point[i].to_bits() == plain.point[i].to_bits());
+                    assert!(same, "face {f} edge {k} hint {hint}: {plain:?} {from:?}");
+                }
+            }
+        }
+    }
+    assert!(
+        on_edges > tris.len(),
+        "only {on_edges} points landed on an edge"
+    );
+}
+
+#[test]
+fn a_point_probed_again_after_the_body_moved_is_searched_again() {
+    // The collider keeps what it found per point; asked again at the same place it must still
+    // answer for the body's new shape, not the old one.
+    let body = bumpy(2, 0.1, 3.0);
+    let mut exact = ExactCollider::new(&body, 0.0).unwrap();
+    let points = vec![Vec3::new(0.0, 0.45, 0.0), Vec3::new(0.3, 0.0, 0.3)];
+    let all = [0, 1];
+    let mut first = Vec::new();
+    exact.probe(&points, &all, &mut first);
+    let mut again = Vec::new();
+    exact.probe(&points, &all, &mut again);
+    assert_eq!(first, again);
+    let moved: Vec<Vec3> = body.positions.iter().map(|p| p * 1.1).collect();
+    exact.update(&BodyFrame {
+        time: 0.1,
+        positions: moved,
+        velocities: Vec::new(),
+    });
+    let mut after = Vec::new();
+    exact.probe(&points, &all, &mut after);
+    for (k, p) in points.iter().enumerate() {
+        let want = exact.project(p).unwrap().distance;
+        assert_eq!(after[k].distance, want, "point {k}");
+        assert!(
+            (after[k].distance - first[k].distance).abs() > 0.01,
+            "point {k}"
+        );
+    }
+    // The same after the referee's own query (`signed_distances`) for the same set.
+    let d = exact.signed_distances(&points);
+    assert_eq!(d, vec![Some(after[0].distance), Some(after[1].distance)]);
+}

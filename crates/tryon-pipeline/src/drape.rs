@@ -228,7 +228,7 @@ impl DrapeScene {
             if self.config.measure_penetration {
                 report.max_penetration = report
                     .max_penetration
-                    .max(penetration(&self.pipeline.referee, x, &[]).max);
+                    .max(penetration(&mut self.pipeline.referee, x, &[]).max);
             }
             let v = &self.pipeline.cloth.velocities;
             progress(&FrameTrace {

@@ -1,24 +1,19 @@
 //! Accuracy metrics: edge stretch, penetration and detachment (by the exact referee).
 
 use body_collide::ExactCollider;
-use rayon::prelude::*;
 use tryon_core::math::{Real, Vec3};
-use tryon_core::stages::Collider;
-
-/// Fewest points a thread takes at once in the referee's queries.
-const QUERY_CHUNK: usize = 256;
 
 /// A garment vertex this much farther from the body than it started counts as detached (m).
 pub const DETACHED: Real = 0.1;
 
 /// Signed distance of every point to the referee's body (0 where it cannot say): the baseline
-/// [`penetration`] judges detachment against.
-pub fn distances(referee: &ExactCollider, points: &[Vec3]) -> Vec<Real> {
-    // Each point's query is its own: in parallel, the same result on any thread count.
-    points
-        .par_iter()
-        .with_min_len(QUERY_CHUNK)
-        .map(|p| referee.signed_distance(p).unwrap_or(0.0))
+/// [`penetration`] judges detachment against. Each point's query is its own, in parallel, started
+/// from the face found for it at the last call (the same answer from any start, to the bit).
+pub fn distances(referee: &mut ExactCollider, points: &[Vec3]) -> Vec<Real> {
+    referee
+        .signed_distances(points)
+        .into_iter()
+        .map(|d| d.unwrap_or(0.0))
         .collect()
 }
 
@@ -61,7 +56,7 @@ pub struct Penetration {
 
 /// Penetration of `points` into the referee's body, and how many moved far from it compared
 /// with `start` (their distances at the start; missing entries count as 0).
-pub fn penetration(referee: &ExactCollider, points: &[Vec3], start: &[Real]) -> Penetration {
+pub fn penetration(referee: &mut ExactCollider, points: &[Vec3], start: &[Real]) -> Penetration {
     let signed = distances(referee, points);
     if signed.is_empty() {
         return Penetration::default();
@@ -117,11 +112,11 @@ mod tests {
 
     #[test]
     fn penetration_counts_only_inside_points() {
-        let referee = ExactCollider::new(&icosphere(0.5, 4, Vec3::zeros()), 0.0).unwrap();
+        let mut referee = ExactCollider::new(&icosphere(0.5, 4, Vec3::zeros()), 0.0).unwrap();
         let pts: Vec<Vec3> = (0..100)
             .map(|i| Vec3::new(0.0, if i < 5 { 0.49 } else { 0.6 }, 0.0))
             .collect();
-        let p = penetration(&referee, &pts, &[]);
+        let p = penetration(&mut referee, &pts, &[]);
         assert!(p.max > 0.009 && p.max < 0.0105, "{p:?}");
         assert_eq!(p.share_over_1mm, 0.05);
         assert!(
@@ -133,9 +128,9 @@ mod tests {
         let far: Vec<Vec3> = (0..10)
             .map(|i| Vec3::new(0.0, if i < 3 { 0.65 } else { 0.55 }, 0.0))
             .collect();
-        assert!((penetration(&referee, &far, &[]).detached_share - 0.3).abs() < 1e-12);
+        assert!((penetration(&mut referee, &far, &[]).detached_share - 0.3).abs() < 1e-12);
         let started = [0.12, 0.12, 0.0];
-        assert!((penetration(&referee, &far, &started).detached_share - 0.1).abs() < 1e-12);
-        assert!((distances(&referee, &far)[0] - 0.15).abs() < 1e-3);
+        assert!((penetration(&mut referee, &far, &started).detached_share - 0.1).abs() < 1e-12);
+        assert!((distances(&mut referee, &far)[0] - 0.15).abs() < 1e-3);
     }
 }

@@ -233,7 +233,12 @@ impl Pipeline {
         }
         let every = self.scene.output.referee_every;
         let start_distances = if every > 0 {
-            crate::metrics::distances(&self.referee, self.output_garment())
+            let garment = if self.surface_stages.is_empty() {
+                &self.cloth.positions
+            } else {
+                &self.surface.positions
+            };
+            crate::metrics::distances(&mut self.referee, garment)
         } else {
             Vec::new()
         };
