@@ -145,21 +145,26 @@ fn run(mut p: Pipeline, out: &Path, frames: Option<usize>, quiet: bool) -> Resul
             s.collider
         );
         println!(
-            "penetration max {:.2} mm, p99 {:.2} mm; stretch {:.3}..{:.3}, mean {:.3}; detached {:.1}%; retries {}, rollbacks {}, non-finite {}",
+            "penetration max {:.2} mm, p99 {:.2} mm; stretch {:.3}..{:.3}, mean {:.3}; detached {}; retries {}, rollbacks {}, non-finite {}",
             m.max_penetration_m * 1e3,
             m.p99_penetration_m * 1e3,
             m.min_stretch,
             m.max_stretch,
             m.mean_stretch,
-            m.detached_share * 100.0,
+            percent(m.detached_share),
             m.substep_retries,
             m.rollbacks,
             m.non_finite_events
         );
         if m.detached_share > 0.0 {
+            let worst = s
+                .per_frame
+                .iter()
+                .max_by(|a, b| a.detached_share.total_cmp(&b.detached_share))
+                .map_or(0, |f| f.frame);
             eprintln!(
-                "warning: {:.1}% of the garment moved more than 10 cm away from the body: it slid or fell off",
-                m.detached_share * 100.0
+                "warning: at frame {worst}, {} of the garment's vertices were more than 10 cm farther from the body than at the start (a hem swinging out, or the garment sliding off it)",
+                percent(m.detached_share)
             );
         }
         for (name, t) in &s.stages {
@@ -257,6 +262,19 @@ fn main() -> ExitCode {
     }
 }
 
+/// A share as a percentage with enough digits that a small one does not read as 0.0%.
+fn percent(share: f64) -> String {
+    let pct = share * 100.0;
+    let digits = if pct == 0.0 || pct >= 1.0 {
+        1
+    } else if pct >= 0.1 {
+        2
+    } else {
+        3
+    };
+    format!("{pct:.digits$}%")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -272,6 +290,14 @@ mod tests {
         let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/scenes/skirt-walk.toml");
         let s = load(&file, &["effects.refine=2".into()]).unwrap_or_else(|_| panic!());
         assert_eq!(s.effects.refine, 2);
+    }
+
+    #[test]
+    fn a_small_share_does_not_print_as_zero() {
+        assert_eq!(percent(0.0), "0.0%");
+        assert_eq!(percent(0.000188), "0.019%");
+        assert_eq!(percent(0.0025), "0.25%");
+        assert_eq!(percent(0.5), "50.0%");
     }
 
     #[test]
