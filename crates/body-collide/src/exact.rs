@@ -27,7 +27,7 @@ use rayon::prelude::*;
 use tryon_core::frames::{BodyFrame, Contact};
 use tryon_core::math::{Real, Vec3, closest_point_on_triangle, is_finite};
 use tryon_core::mesh::PolyMesh;
-use tryon_core::stages::{Collider, Probe};
+use tryon_core::stages::{Collider, Poke, Probe};
 
 /// Fewest points a thread probes at once.
 const PAR_CHUNK: usize = 64;
@@ -409,6 +409,34 @@ impl Collider for ExactCollider {
         self.swept
             .sweep(&self.body, start, end, span, skin, contacts);
         true
+    }
+
+    /// The walk of the nearest-vertex collider's `pokes`, started for each corner from the
+    /// corner of the face found for it at its last probe that is nearest to it (nothing for a
+    /// point never probed).
+    fn pokes(
+        &mut self,
+        points: &[Vec3],
+        triangles: &[[u32; 3]],
+        which: &[u32],
+        limits: (Real, Real),
+        out: &mut Vec<Poke>,
+    ) {
+        let memo = self.take_memo(points.len());
+        let nearest: Vec<u32> = memo
+            .found
+            .iter()
+            .map(|pr| match pr {
+                Some(pr) => {
+                    let k = (0..3).fold(0, |a, k| if pr.bary[k] > pr.bary[a] { k } else { a });
+                    self.body.triangles[pr.face as usize][k]
+                }
+                None => NONE,
+            })
+            .collect();
+        let cloth = (points, triangles, which);
+        crate::tracker::pokes::pokes_from(&self.body, &nearest, cloth, limits, out);
+        self.put_memo(memo);
     }
 
     fn probe(&mut self, points: &[Vec3], which: &[u32], out: &mut Vec<Probe>) {

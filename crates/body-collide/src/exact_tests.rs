@@ -290,3 +290,39 @@ fn a_point_probed_again_after_the_body_moved_is_searched_again() {
     let d = exact.signed_distances(&points);
     assert_eq!(d, vec![Some(after[0].distance), Some(after[1].distance)]);
 }
+
+#[test]
+fn the_exact_collider_finds_a_body_vertex_poking_through_a_cloth_triangle() {
+    // A ball with one vertex pushed 6 mm out (a nipple); a cloth triangle 3 mm over the ball
+    // around it, its corners probed first (the walk starts from their nearest faces).
+    let mut m = icosphere(0.2, 3, Vec3::zeros());
+    let top = (0..m.positions.len())
+        .max_by(|&a, &b| m.positions[a].y.total_cmp(&m.positions[b].y))
+        .unwrap();
+    m.positions[top] *= 1.0 + 0.006 / 0.2;
+    let mut exact = ExactCollider::new(&m, 0.0).unwrap();
+    let up = m.positions[top].normalize();
+    let (e1, e2) = (
+        up.cross(&Vec3::x()).normalize(),
+        up.cross(&up.cross(&Vec3::x())).normalize(),
+    );
+    let centre = up * 0.203;
+    let cloth: Vec<Vec3> = (0..3)
+        .map(|k| {
+            let a = std::f64::consts::TAU * k as Real / 3.0;
+            centre + (e1 * a.cos() + e2 * a.sin()) * 0.03
+        })
+        .collect();
+    let mut probes = Vec::new();
+    exact.probe(&cloth, &[0, 1, 2], &mut probes);
+    let mut pokes = Vec::new();
+    exact.pokes(&cloth, &[[0, 1, 2]], &[0], (0.001, 0.01), &mut pokes);
+    let p = pokes
+        .iter()
+        .find(|p| (p.point - m.positions[top]).norm() < 1e-12);
+    let p = p.expect("the pushed vertex pokes through");
+    assert_eq!(p.triangle, 0);
+    assert!(p.bary.iter().all(|&w| w >= 0.0));
+    // Nothing else of the ball is within 1 mm under the triangle or through it.
+    assert_eq!(pokes.len(), 1, "{pokes:?}");
+}

@@ -208,6 +208,7 @@ fn surface_stages(
         skin: fx.fine_skin,
         margin: fx.fine_margin,
         max_fine_stretch: fx.max_fine_stretch,
+        pokes: fx.fine_pokes,
     };
     let detail = wrinkle::Detail::new(&surface, &garment.positions, params.clone())?;
     let fine_collider = if params.fine_collision {

@@ -10,6 +10,10 @@ use tryon_core::stages::Collider;
 /// nearest-vertex tracker says so only beyond its cull margin (5 cm) of the body's box.
 const UNKNOWN_FAR: Real = 0.05;
 
+/// Least cosine between a poking body vertex's normal and the cloth's outward direction there for
+/// the cloth to be lifted over it.
+const FACING_OUT: Real = 0.5;
+
 impl Detail {
     /// Probes the vertices in `self.which` and raises those within `skin` of the body. Each
     /// probed vertex's distance becomes its bound in `self.near` (0 once raised). Returns how many
@@ -105,6 +109,88 @@ impl Detail {
         }
         self.stats.probed = probed;
         self.stats.raised = raised;
+        self.stats.lifted = if self.params.pokes {
+            self.lift_over_pokes(fine, collider)
+        } else {
+            0
+        };
+    }
+
+    /// Lifts the fine surface over the body vertices under its triangles that are less than
+    /// `skin` below it or poke through it (up to `margin`): features narrower than the fine
+    /// triangles (a nipple, a shoulder's tip) that no test of the fine vertices sees. Only
+    /// triangles whose corners the body may be within `margin` of are asked. Each corner moves
+    /// along the body vertex's normal by its share of the lift (the smallest move that puts the
+    /// point over the vertex `skin` out); a vertex under several pokes takes the largest move.
+    /// Returns how many fine vertices moved.
+    fn lift_over_pokes(&mut self, fine: &mut FineSurface, collider: &mut dyn Collider) -> usize {
+        let (skin, margin) = (self.params.skin, self.params.margin);
+        let near = &self.near;
+        let tris: Vec<u32> = (0..fine.triangles.len() as u32)
+            .filter(|&t| {
+                let c = fine.triangles[t as usize];
+                c.iter()
+                    .all(|&v| near.get(v as usize).is_some_and(|&d| d < margin))
+            })
+            .collect();
+        if tris.is_empty() {
+            return 0;
+        }
+        let mut pokes = Vec::new();
+        collider.pokes(
+            &fine.positions,
+            &fine.triangles,
+            &tris,
+            (skin, margin),
+            &mut pokes,
+        );
+        let mut moves: Vec<(u32, Vec3)> = Vec::new();
+        for pk in &pokes {
+            let c = fine.triangles[pk.triangle as usize];
+            // Only a vertex whose outside is the cloth's outside: not the underside of an arm
+            // over cloth on the torso, which would push the cloth into the torso.
+            let out: Vec3 = (0..3)
+                .map(|k| self.control[c[k] as usize] * pk.bary[k])
+                .sum();
+            if !(pk.normal.dot(&out) > FACING_OUT * out.norm()) {
+                continue;
+            }
+            let q: Vec3 = (0..3)
+                .map(|k| fine.positions[c[k] as usize] * pk.bary[k])
+                .sum();
+            let need = skin - pk.normal.dot(&(q - pk.point));
+            let w2: Real = pk.bary.iter().map(|w| w * w).sum();
+            if !(need > 0.0 && w2 > 0.0) {
+                continue;
+            }
+            for k in 0..3 {
+                moves.push((c[k], pk.normal * (pk.bary[k] * need / w2)));
+            }
+        }
+        // The largest move per vertex, in a fixed order.
+        moves.sort_by(|a, b| {
+            a.0.cmp(&b.0)
+                .then(b.1.norm_squared().total_cmp(&a.1.norm_squared()))
+        });
+        moves.dedup_by_key(|m| m.0);
+        moves.retain(|(_, d)| d.norm_squared() > 0.0 && tryon_core::math::is_finite(d));
+        for &(v, d) in &moves {
+            fine.positions[v as usize] += d;
+        }
+        // A lift that put a vertex inside another part of the body is taken back.
+        let moved: Vec<u32> = moves.iter().map(|m| m.0).collect();
+        collider.probe(&fine.positions, &moved, &mut self.probes);
+        let mut lifted = 0;
+        for (k, &(v, d)) in moves.iter().enumerate() {
+            let v = v as usize;
+            if self.probes.get(k).is_some_and(|p| p.distance < 0.0) {
+                fine.positions[v] -= d;
+            } else {
+                self.raise[v] += d.norm();
+                lifted += 1;
+            }
+        }
+        lifted
     }
 
     /// The vertices of the level whose lattice step is `s` that the body may be within `margin`

@@ -61,6 +61,9 @@ pub struct DetailParams {
     pub margin: Real,
     /// Longest a fine edge may get through height differences, over its reference length.
     pub max_fine_stretch: Real,
+    /// After the fine collision, lift the fine surface over body vertices that poke through
+    /// between its vertices (a nipple, a shoulder's tip), by the collider's `pokes`.
+    pub pokes: bool,
 }
 
 impl Default for DetailParams {
@@ -75,6 +78,7 @@ impl Default for DetailParams {
             skin: 0.001,
             margin: 0.01,
             max_fine_stretch: 1.25,
+            pokes: true,
         }
     }
 }
@@ -117,6 +121,8 @@ pub struct DetailStats {
     pub probed: usize,
     /// Fine vertices raised out of the body this frame.
     pub raised: usize,
+    /// Fine vertices lifted over body vertices poking through between them this frame.
+    pub lifted: usize,
     /// Largest wrinkle height (m).
     pub max_height: Real,
 }

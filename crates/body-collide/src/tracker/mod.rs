@@ -80,7 +80,7 @@ use tryon_core::stages::{Collider, Poke, Probe};
 
 mod fan;
 mod opposite;
-mod pokes;
+pub(crate) mod pokes;
 mod resolve;
 
 /// Per body vertex whether its fan is convex: 0 not yet known, 1 convex, 2 not. Atomic so that

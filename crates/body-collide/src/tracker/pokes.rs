@@ -33,23 +33,37 @@ impl NearestVertexCollider {
         if self.probe_nearest.len() != points.len() {
             return;
         }
-        let (body, nearest) = (&self.body, &self.probe_nearest);
-        let n = body.positions.len();
-        let found: Vec<Vec<Poke>> = which
-            .par_iter()
-            .with_min_len(64)
-            .map_init(
-                || Seen::new(n),
-                |seen, &t| {
-                    let Some(tri) = triangles.get(t as usize) else {
-                        return Vec::new();
-                    };
-                    under_triangle(body, nearest, points, (t, *tri), limits, seen)
-                },
-            )
-            .collect();
-        out.extend(found.into_iter().flatten());
+        let cloth = (points, triangles, which);
+        pokes_from(&self.body, &self.probe_nearest, cloth, limits, out);
     }
+}
+
+/// [`Collider::pokes`] by a walk over `body`'s vertex rings from `nearest[k]`, a body vertex near
+/// each point `k` (`u32::MAX` for none: the walk starts from the other corners), in parallel,
+/// written in the order of `which`.
+pub(crate) fn pokes_from(
+    body: &BodyMesh,
+    nearest: &[u32],
+    (points, triangles, which): (&[Vec3], &[[u32; 3]], &[u32]),
+    limits: (Real, Real),
+    out: &mut Vec<Poke>,
+) {
+    out.clear();
+    let n = body.positions.len();
+    let found: Vec<Vec<Poke>> = which
+        .par_iter()
+        .with_min_len(64)
+        .map_init(
+            || Seen::new(n),
+            |seen, &t| {
+                let Some(tri) = triangles.get(t as usize) else {
+                    return Vec::new();
+                };
+                under_triangle(body, nearest, points, (t, *tri), limits, seen)
+            },
+        )
+        .collect();
+    out.extend(found.into_iter().flatten());
 }
 
 /// Which body vertices one walk has visited: a stamp per vertex, so a walk costs what it visits.
@@ -109,8 +123,9 @@ fn under_triangle(
     seen.clear();
     let mut visited: Vec<u32> = Vec::with_capacity(MAX_VISITS);
     for &k in &tri {
-        if seen.insert(nearest[k as usize]) {
-            visited.push(nearest[k as usize]);
+        let v = nearest.get(k as usize).copied().unwrap_or(u32::MAX);
+        if (v as usize) < body.positions.len() && seen.insert(v) {
+            visited.push(v);
         }
     }
     let mut next = 0;

@@ -280,6 +280,9 @@ pub struct EffectsSection {
     /// Longest a fine edge may get through wrinkle height differences, over its reference length.
     #[schemars(range(min = 1.0, max = 3.0))]
     pub max_fine_stretch: Real,
+    /// The fine collision also lifts the fine surface over body vertices that poke through
+    /// between its vertices (a nipple, a shoulder's tip), `fine_skin` out.
+    pub fine_pokes: bool,
 }
 
 impl Default for EffectsSection {
@@ -311,6 +314,7 @@ impl Default for EffectsSection {
             fine_skin: detail.skin,
             fine_margin: detail.margin,
             max_fine_stretch: detail.max_fine_stretch,
+            fine_pokes: detail.pokes,
         }
     }
 }
