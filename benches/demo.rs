@@ -1,6 +1,10 @@
-//! Criterion benchmark of one frame of the demo scene (mannequin walking in the dress, about 350
-//! coarse particles): motion, skinning (7.5k body vertices), following, collider update and the
-//! cloth step, single thread (the demo's surface stages are left out: see `surface`). The referee (accuracy) is not timed; `tryon demo` reports it.
+//! Criterion benchmarks of whole frames, single thread. The demo scene (mannequin walking in the
+//! dress, about 350 coarse particles): motion, skinning (7.5k body vertices), following, collider
+//! update and the cloth step (its surface stages are left out: see `surface`). And
+//! makehuman-dress-walk as a user runs it (exact collider, refined surface with fine collision,
+//! with and without `fine_pokes`; skipped when the shared assets are absent): every stage a frame
+//! runs, so a cost the cloth-step benchmark cannot see (a collider starting cold after the fine
+//! surface's queries) shows here. The referee (accuracy) is not timed; `tryon run` reports it.
 //! Each timed iteration is one walking frame; the pipeline is rebuilt (untimed) when the clip ends.
 
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -22,6 +26,71 @@ fn fresh() -> (Pipeline, LoopState, usize) {
         p.advance(&mut st, p.frame_time(k), &mut timers);
     }
     (p, st, first)
+}
+
+/// makehuman-dress-walk with `sets`, run untimed to frame 30 (`None` without the shared assets).
+fn makehuman(sets: &[&str]) -> Option<(Pipeline, LoopState, usize)> {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../data/scenes/makehuman-dress-walk.toml");
+    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    let scene = Scene::load_with_overrides(&path, &sets)
+        .map_err(|e| eprintln!("skipped makehuman-dress-walk: {e}"))
+        .ok()?;
+    let mut p = Pipeline::new(scene)
+        .map_err(|e| eprintln!("skipped makehuman-dress-walk: {e}"))
+        .ok()?;
+    let mut st = p.start();
+    let mut timers = Timers::default();
+    let first = 30;
+    for k in 1..first {
+        p.advance(&mut st, p.frame_time(k), &mut timers);
+    }
+    Some((p, st, first))
+}
+
+fn makehuman_frame(c: &mut Criterion) {
+    let mut group = c.benchmark_group("makehuman_frame");
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(8));
+    let Ok(pool) = rayon::ThreadPoolBuilder::new().num_threads(1).build() else {
+        return;
+    };
+    let cases: [(&str, &[&str]); 2] = [
+        ("walk_dress_exact_refine1", &[]),
+        (
+            "walk_dress_exact_refine1_no_pokes",
+            &["effects.fine_pokes=false"],
+        ),
+    ];
+    for (name, sets) in cases {
+        let Some((mut p, mut st, mut k)) = pool.install(|| makehuman(sets)) else {
+            continue;
+        };
+        group.bench_function(name, |b| {
+            b.iter_custom(|iters| {
+                let mut total = Duration::ZERO;
+                let mut timers = Timers::default();
+                for _ in 0..iters {
+                    if k >= p.frames {
+                        let Some(again) = pool.install(|| makehuman(sets)) else {
+                            break;
+                        };
+                        (p, st, k) = again;
+                    }
+                    let t0 = Instant::now();
+                    pool.install(|| {
+                        std::hint::black_box(p.advance(&mut st, p.frame_time(k), &mut timers))
+                    });
+                    total += t0.elapsed();
+                    k += 1;
+                }
+                total
+            })
+        });
+    }
+    group.finish();
 }
 
 fn demo_frame(c: &mut Criterion) {
@@ -50,5 +119,5 @@ fn demo_frame(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, demo_frame);
+criterion_group!(benches, demo_frame, makehuman_frame);
 criterion_main!(benches);
