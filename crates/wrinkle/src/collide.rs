@@ -146,7 +146,9 @@ impl Detail {
         );
         let mut moves: Vec<(u32, Vec3)> = Vec::new();
         for pk in &pokes {
-            let c = fine.triangles[pk.triangle as usize];
+            let Some(&c) = fine.triangles.get(pk.triangle as usize) else {
+                continue;
+            };
             // Only a vertex whose outside is the cloth's outside: not the underside of an arm
             // over cloth on the torso, which would push the cloth into the torso.
             let out: Vec3 = (0..3)
