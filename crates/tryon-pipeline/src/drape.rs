@@ -6,7 +6,7 @@
 //! the sphere mesh judged by the exact referee.
 
 use crate::assemble::AssembleError;
-use crate::metrics::{median, penetration};
+use crate::metrics::{Baseline, median, penetration};
 use crate::pipeline::{LoopState, Pipeline};
 use crate::scene::{Scene, SceneError};
 use crate::timers::Timers;
@@ -228,7 +228,7 @@ impl DrapeScene {
             if self.config.measure_penetration {
                 report.max_penetration = report
                     .max_penetration
-                    .max(penetration(&mut self.pipeline.referee, x, &[]).max);
+                    .max(penetration(&mut self.pipeline.referee, x, &Baseline::default()).max);
             }
             let v = &self.pipeline.cloth.velocities;
             progress(&FrameTrace {

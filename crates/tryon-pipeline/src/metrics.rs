@@ -3,8 +3,7 @@
 use body_collide::ExactCollider;
 use tryon_core::math::{Real, Vec3};
 
-/// A garment vertex this much farther from the body than it started counts as detached (m).
-pub const DETACHED: Real = 0.1;
+pub use crate::hold::{Baseline, DETACHED};
 
 /// Signed distance of every point to the referee's body (0 where it cannot say): the baseline
 /// [`penetration`] judges detachment against. Each point's query is its own, in parallel, started
@@ -48,24 +47,20 @@ pub struct Penetration {
     pub p99: Real,
     /// Share of points deeper than 1 mm.
     pub share_over_1mm: Real,
-    /// Share of points more than [`DETACHED`] farther from the body than their distance in
-    /// `start`: a garment that slid or fell off reads here while its penetration reads 0 (a flared
-    /// hem that started far from the legs does not).
+    /// Share of points detached from the body by [`Baseline::detached_share`]'s rule: a garment
+    /// that slid, tore or fell off reads here while its penetration reads 0 (a flared hem
+    /// swinging out from the legs does not).
     pub detached_share: Real,
 }
 
-/// Penetration of `points` into the referee's body, and how many moved far from it compared
-/// with `start` (their distances at the start; missing entries count as 0).
-pub fn penetration(referee: &mut ExactCollider, points: &[Vec3], start: &[Real]) -> Penetration {
+/// Penetration of `points` into the referee's body, and how many are detached compared with
+/// `start` (see [`crate::hold`]).
+pub fn penetration(referee: &mut ExactCollider, points: &[Vec3], start: &Baseline) -> Penetration {
     let signed = distances(referee, points);
     if signed.is_empty() {
         return Penetration::default();
     }
-    let base = |i: usize| start.get(i).copied().unwrap_or(0.0).max(0.0);
-    let detached = (0..signed.len())
-        .filter(|&i| signed[i] > base(i) + DETACHED)
-        .count() as Real
-        / signed.len() as Real;
+    let detached = start.detached_share(&signed);
     let mut d: Vec<Real> = signed.iter().map(|s| (-s).max(0.0)).collect();
     d.sort_by(|a, b| a.total_cmp(b));
     let k = ((d.len() as Real * 0.99).ceil() as usize).clamp(1, d.len()) - 1;
@@ -116,7 +111,8 @@ mod tests {
         let pts: Vec<Vec3> = (0..100)
             .map(|i| Vec3::new(0.0, if i < 5 { 0.49 } else { 0.6 }, 0.0))
             .collect();
-        let p = penetration(&mut referee, &pts, &[]);
+        let none = Baseline::default();
+        let p = penetration(&mut referee, &pts, &none);
         assert!(p.max > 0.009 && p.max < 0.0105, "{p:?}");
         assert_eq!(p.share_over_1mm, 0.05);
         assert!(
@@ -128,8 +124,8 @@ mod tests {
         let far: Vec<Vec3> = (0..10)
             .map(|i| Vec3::new(0.0, if i < 3 { 0.65 } else { 0.55 }, 0.0))
             .collect();
-        assert!((penetration(&mut referee, &far, &[]).detached_share - 0.3).abs() < 1e-12);
-        let started = [0.12, 0.12, 0.0];
+        assert!((penetration(&mut referee, &far, &none).detached_share - 0.3).abs() < 1e-12);
+        let started = Baseline::without_mesh(vec![0.12, 0.12, 0.0]);
         assert!((penetration(&mut referee, &far, &started).detached_share - 0.1).abs() < 1e-12);
         assert!((distances(&mut referee, &far)[0] - 0.15).abs() < 1e-3);
     }

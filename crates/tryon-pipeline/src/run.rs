@@ -2,7 +2,7 @@
 //! every stage timed; the result holds every frame's garment and pose for the exporters, and the
 //! statistics written to stats.json.
 
-use crate::metrics::{penetration, stretch};
+use crate::metrics::{Baseline, penetration, stretch};
 use crate::pipeline::{LoopState, Pipeline, run_surface};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -232,17 +232,18 @@ impl Pipeline {
             tryon_core::stages::Collider::update(&mut self.referee, &st.body_frame);
         }
         let every = self.scene.output.referee_every;
+        let garment_triangles = self.output_triangles();
         let start_distances = if every > 0 {
             let garment = if self.surface_stages.is_empty() {
                 &self.cloth.positions
             } else {
                 &self.surface.positions
             };
-            crate::metrics::distances(&mut self.referee, garment)
+            let d = crate::metrics::distances(&mut self.referee, garment);
+            Baseline::new(d, &garment_triangles, garment)
         } else {
-            Vec::new()
+            Baseline::default()
         };
-        let garment_triangles = self.output_triangles();
         let (garment_names, triangle_garment) = self.output_garments(&garment_triangles);
         let (body_triangles, _) = self.body_mesh.triangulate();
         let refines = !self.surface_stages.is_empty();
