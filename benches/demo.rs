@@ -1,5 +1,5 @@
 //! Criterion benchmarks of whole frames, single thread. The demo scene (mannequin walking in the
-//! dress, about 350 coarse particles): motion, skinning (7.5k body vertices), following, collider
+//! dress, about 350 coarse particles; under P1's solver and the scene's own, VBD): motion, skinning (7.5k body vertices), following, collider
 //! update and the cloth step (its surface stages are left out: see `surface`). And
 //! makehuman-dress-walk as a user runs it (exact collider, refined surface with fine collision,
 //! with and without `fine_pokes`; skipped when the shared assets are absent): every stage a frame
@@ -11,12 +11,14 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use std::time::{Duration, Instant};
 use tryon_pipeline::LoopState;
 use tryon_pipeline::run::Timers;
+use tryon_pipeline::scene::SolverName;
 use tryon_pipeline::{Pipeline, Scene};
 
-fn fresh() -> (Pipeline, LoopState, usize) {
+fn fresh(solver: SolverName) -> (Pipeline, LoopState, usize) {
     // The coarse frame only (the surface stages have their own benchmark, `surface`).
     let mut scene = Scene::demo();
     scene.effects.refine = 0;
+    scene.cloth.solver = solver;
     let mut p = Pipeline::new(scene).unwrap_or_else(|e| panic!("demo scene: {e}"));
     let mut st = p.start();
     let mut timers = Timers::default();
@@ -99,23 +101,29 @@ fn demo_frame(c: &mut Criterion) {
         .sample_size(20)
         .warm_up_time(Duration::from_secs(1))
         .measurement_time(Duration::from_secs(4));
-    let (mut p, mut st, mut k) = fresh();
-    group.bench_function("walk_dress_rk4", |b| {
-        b.iter_custom(|iters| {
-            let mut total = Duration::ZERO;
-            let mut timers = Timers::default();
-            for _ in 0..iters {
-                if k >= p.frames {
-                    (p, st, k) = fresh();
+    // P1's solver (the paper's) and the demo's own, VBD.
+    for (name, solver) in [
+        ("walk_dress_rk4", SolverName::P1),
+        ("walk_dress_vbd", SolverName::Vbd),
+    ] {
+        let (mut p, mut st, mut k) = fresh(solver);
+        group.bench_function(name, |b| {
+            b.iter_custom(|iters| {
+                let mut total = Duration::ZERO;
+                let mut timers = Timers::default();
+                for _ in 0..iters {
+                    if k >= p.frames {
+                        (p, st, k) = fresh(solver);
+                    }
+                    let t0 = Instant::now();
+                    std::hint::black_box(p.advance(&mut st, p.frame_time(k), &mut timers));
+                    total += t0.elapsed();
+                    k += 1;
                 }
-                let t0 = Instant::now();
-                std::hint::black_box(p.advance(&mut st, p.frame_time(k), &mut timers));
-                total += t0.elapsed();
-                k += 1;
-            }
-            total
-        })
-    });
+                total
+            })
+        });
+    }
     group.finish();
 }
 

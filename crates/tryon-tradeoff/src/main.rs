@@ -9,7 +9,7 @@
 //! (d) wrinkles off and on: length restoration against ms;
 //! (e) P4's scene: fine penetration with and without the depth-map correction, and what running
 //!     the coarse step and the fine correction at the same time gains;
-//! (f) the stretch guard on the demo walk;
+//! (f) the stretch guard on the demo walk (P1's solver);
 //! (g) the garment solvers (P1, XPBD, VBD) on every scene.
 //!
 //! Writes `report.md`, `results.json`-like tables and SVG plots (Pareto fronts marked) under the

@@ -337,6 +337,24 @@ impl VbdSim {
         self.prev = prev;
     }
 
+    /// The net force of the springs on every particle at `x` (N), as the wrinkle stage reads it
+    /// from the frame (P1 4.3.2's elastic forces): the same springs the sweeps minimise over.
+    fn elastic_forces(&self, x: &[Vec3], out: &mut Vec<Vec3>) {
+        out.clear();
+        let n = x.len().min(self.offsets.len().saturating_sub(1));
+        out.extend((0..n).map(|i| {
+            let mut f = Vec3::zeros();
+            for a in pairs::arms_of(&self.offsets, &self.arms, i) {
+                let d = x[i] - x[a.other as usize];
+                let l = d.norm();
+                if l > 1e-12 {
+                    f -= d * (a.k * (l - a.rest) / l);
+                }
+            }
+            f
+        }));
+    }
+
     /// Vertex `i`'s force and Hessian at `x`: inertia, its springs except those to `partner`,
     /// and its contact planes.
     fn gather(&self, x: &[Vec3], i: usize, partner: u32, h: Real) -> (Vec3, Mat3) {
@@ -556,6 +574,7 @@ impl ClothSolver for VbdSim {
         self.backup = backup;
         self.layers_frame_end(&frame.positions);
         frame.contacts.clone_from(&self.contacts);
+        self.elastic_forces(&frame.positions, &mut frame.elastic_force);
         report.contacts = frame.contacts.len() as u32;
         report
     }
