@@ -4,7 +4,11 @@
 //! hand then sits inside the hip, and a garment between them is pinched through. Here each frame's
 //! arms are opened sideways about the shoulder, by the smallest angle that puts the elbow, wrist
 //! and hand at least a margin outside the body's rest envelope (its cross-sections without the
-//! arms), and the angles are smoothed over time so the correction never jerks.
+//! arms), and the angles are smoothed over time so the correction never jerks. The head is kept
+//! clear the same way: a clip whose actor touches their face puts a retargeted hand, on a body of
+//! other proportions, into the head (CMU 131_01 on the MakeHuman body: the fingers in the face
+//! and the sleeve's cuff 27 mm inside it), so the wrist, forearm and fingertips are also kept
+//! [`HEAD_MARGIN`] outside the head at rest, an ellipsoid carried by the head joint.
 
 use crate::names::{Role, RoleMap};
 use crate::retarget::Retargeted;
@@ -16,6 +20,9 @@ use tryon_core::pose::{Pose, Skeleton};
 /// On makehuman-dress-walk 0.04 left the jacket pinched 19 mm into the hips; 0.07 clears them
 /// (openings of at most 10 degrees).
 pub const DEFAULT_MARGIN: Real = 0.07;
+/// How far outside the head's ellipsoid the wrist, forearm and fingertips are kept (m): a
+/// wrist's half-thickness and a sleeve.
+pub const HEAD_MARGIN: Real = 0.03;
 /// Seconds either side over which openings are smoothed.
 pub const SMOOTHING_S: Real = 0.15;
 
@@ -32,6 +39,79 @@ const MAX_OPEN_DEG: u32 = 45;
 pub struct Envelope {
     pub y0: Real,
     pub slabs: Vec<Slab>,
+    /// The head, when the body has one.
+    pub head: Option<Head>,
+    /// Per hand joint, its farthest skin vertex at rest (the middle fingertip): a rig's hand bone
+    /// can end at the knuckles, 15 cm short of the fingers that reach a face.
+    pub fingertips: Vec<(usize, Vec3)>,
+}
+
+/// The head at rest, carried by the head joint `joint`: star-shaped about `centre` (the middle of
+/// its box), its largest radius per direction bin (latitude x longitude), so a forehead or a nose
+/// counts where an ellipsoid would miss it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Head {
+    pub joint: usize,
+    pub centre: Vec3,
+    /// `HEAD_BINS.0 * HEAD_BINS.1` radii (m), latitude-major.
+    pub radius: Vec<Real>,
+}
+
+/// Direction bins of a [`Head`]: latitude, longitude.
+const HEAD_BINS: (usize, usize) = (12, 24);
+
+fn head_bin(d: &Vec3) -> (usize, usize) {
+    let r = d.norm();
+    let lat = if r > 0.0 {
+        (d.y / r).clamp(-1.0, 1.0).acos()
+    } else {
+        0.0
+    };
+    let lon = d.z.atan2(d.x) + std::f64::consts::PI;
+    let i = ((lat / std::f64::consts::PI * HEAD_BINS.0 as Real) as usize).min(HEAD_BINS.0 - 1);
+    let k = ((lon / std::f64::consts::TAU * HEAD_BINS.1 as Real) as usize).min(HEAD_BINS.1 - 1);
+    (i, k)
+}
+
+impl Head {
+    /// The head around `points` (its vertices at rest); `None` for none.
+    pub fn new(joint: usize, points: &[Vec3]) -> Option<Head> {
+        let first = *points.first()?;
+        // The box's middle: a face has many more vertices than the back of the head, which would
+        // pull a mean forward.
+        let lo = points.iter().fold(first, |a, p| a.inf(p));
+        let hi = points.iter().fold(first, |a, p| a.sup(p));
+        let centre = (lo + hi) / 2.0;
+        if !centre.iter().all(|c| c.is_finite()) {
+            return None;
+        }
+        let mut radius = vec![0.0; HEAD_BINS.0 * HEAD_BINS.1];
+        for p in points {
+            let (i, k) = head_bin(&(p - centre));
+            let r = &mut radius[i * HEAD_BINS.1 + k];
+            *r = Real::max(*r, (p - centre).norm());
+        }
+        Some(Head {
+            joint,
+            centre,
+            radius,
+        })
+    }
+
+    /// Whether `p` (in the head's rest frame) is within `margin` of the head: nearer the centre
+    /// than the largest radius of its direction's bin and the bins around it, plus `margin`.
+    pub fn contains(&self, p: &Vec3, margin: Real) -> bool {
+        let d = p - self.centre;
+        let (i, k) = head_bin(&d);
+        let (nl, nk) = HEAD_BINS;
+        let mut reach: Real = 0.0;
+        for ii in i.saturating_sub(1)..=(i + 1).min(nl - 1) {
+            for dk in [nk - 1, 0, 1] {
+                reach = reach.max(self.radius[ii * nk + (k + dk) % nk]);
+            }
+        }
+        reach > 0.0 && d.norm() < reach + margin
+    }
 }
 
 /// One slab of an [`Envelope`].
@@ -80,7 +160,12 @@ impl Envelope {
             let r = &mut s.radius[sector(dx, dz)];
             *r = r.max((dx * dx + dz * dz).sqrt());
         }
-        Some(Envelope { y0, slabs })
+        Some(Envelope {
+            y0,
+            slabs,
+            head: None,
+            fingertips: Vec::new(),
+        })
     }
 
     /// The envelope of a skinned body at rest: its vertices whose strongest joint is not an upper
@@ -103,16 +188,51 @@ impl Envelope {
                 None => return false,
             }
         };
+        let strongest = |(j, w): (&[u16; 4], &[Real; 4])| {
+            let k = (0..4).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap_or(0);
+            j[k] as usize
+        };
         let body: Vec<Vec3> = points
             .iter()
             .zip(joints.iter().zip(weights))
-            .filter(|(_, (j, w))| {
-                let k = (0..4).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap_or(0);
-                !on_arm(j[k] as usize)
-            })
+            .filter(|(_, jw)| !on_arm(strongest(*jw)))
             .map(|(p, _)| *p)
             .collect();
-        Envelope::new(&body, rest[uppers[0]].y.min(rest[uppers[1]].y))
+        let mut e = Envelope::new(&body, rest[uppers[0]].y.min(rest[uppers[1]].y))?;
+        // The skin moved by joint `top` or a joint under it.
+        let skin_under = |top: usize| -> Vec<Vec3> {
+            let under = |mut j: usize| loop {
+                if j == top {
+                    return true;
+                }
+                match skeleton.parents.get(j).copied().flatten() {
+                    Some(p) => j = p,
+                    None => return false,
+                }
+            };
+            points
+                .iter()
+                .zip(joints.iter().zip(weights))
+                .filter(|(_, jw)| under(strongest(*jw)))
+                .map(|(p, _)| *p)
+                .collect()
+        };
+        e.head = map
+            .get(Role::Head)
+            .and_then(|head| Head::new(head, &skin_under(head)));
+        for hand in [map.get(Role::LHand), map.get(Role::RHand)]
+            .into_iter()
+            .flatten()
+        {
+            let Some(&wrist) = rest.get(hand) else {
+                continue;
+            };
+            let far = skin_under(hand)
+                .into_iter()
+                .max_by(|a, b| (a - wrist).norm().total_cmp(&(b - wrist).norm()));
+            e.fingertips.extend(far.map(|f| (hand, f)));
+        }
+        Some(e)
     }
 
     /// How far `p` is inside the envelope grown by `margin` (positive inside, 0 outside).
@@ -227,15 +347,15 @@ pub fn keep_arms_clear(
         } else {
             -1.0
         };
-        let need: Vec<Real> = motion
+        let (need, axes): (Vec<Real>, Vec<Vec3>) = motion
             .poses
             .iter()
             .map(|pose| opening(&skeleton, rest, pose, arm, hips, side, envelope, margin))
-            .collect();
+            .unzip();
         let smooth = smooth_max(&need, window);
-        for (pose, &phi) in motion.poses.iter_mut().zip(&smooth) {
+        for ((pose, &phi), &axis) in motion.poses.iter_mut().zip(&smooth).zip(&axes) {
             if phi > 0.0 {
-                open(&skeleton, rest, pose, arm.upper, hips, side * phi);
+                open(&skeleton, rest, pose, arm.upper, axis, phi);
                 report.frames_opened += 1;
                 report.max_open_deg = report.max_open_deg.max(phi.to_degrees());
             }
@@ -245,7 +365,10 @@ pub fn keep_arms_clear(
     report
 }
 
-/// The smallest opening (radians, in whole degrees) that clears the arm in `pose`.
+/// The smallest opening (radians, in whole degrees) that clears the arm in `pose`, and the world
+/// axis (through the shoulder) it turns the upper arm about. A hand below its shoulder opens
+/// sideways, about the root's forward axis, away from the midline; a hand above it (at the face)
+/// swings away from the head, in the plane through the shoulder, the wrist and the head's centre.
 #[allow(clippy::too_many_arguments)]
 fn opening(
     skeleton: &Skeleton,
@@ -256,44 +379,74 @@ fn opening(
     side: Real,
     envelope: &Envelope,
     margin: Real,
-) -> Real {
+) -> (Real, Vec3) {
     let (g, p) = forward(skeleton, rest, pose);
-    // Into the root's rest frame, where the envelope was taken.
+    // Into the root's rest frame, where the envelope was taken, and the head's.
     let to_rest = |x: Vec3| g[hips].inverse() * (x - p[hips]) + rest[hips];
+    let head = envelope.head.as_ref().filter(|h| h.joint < g.len());
+    let to_head = |h: &Head, x: Vec3| g[h.joint].inverse() * (x - p[h.joint]) + rest[h.joint];
     let tip = p[arm.hand] + g[arm.hand] * (arm.tip - rest[arm.hand]);
-    let pts = [
+    let pivot = p[arm.upper];
+    let local = [
         p[arm.forearm],
         p[arm.hand],
         tip,
         (p[arm.forearm] + p[arm.hand]) / 2.0,
-    ];
-    let pivot = to_rest(p[arm.upper]);
-    let local: Vec<Vec3> = pts.iter().map(|&x| to_rest(x) - pivot).collect();
+    ]
+    .map(|x| x - pivot);
+    let forward_axis = g[hips] * Vec3::z();
+    let sideways = forward_axis * side;
+    let raised = to_rest(p[arm.hand]).y > to_rest(pivot).y;
+    let axis = match head {
+        Some(h) if raised => {
+            let centre = p[h.joint] + g[h.joint] * (h.centre - rest[h.joint]);
+            // Turning the wrist about (centre - shoulder) x (wrist - shoulder) moves it away
+            // from the centre.
+            let a = (centre - pivot).cross(&local[1]);
+            if a.norm() > 1e-9 {
+                a.normalize()
+            } else {
+                -sideways
+            }
+        }
+        _ if raised => -sideways,
+        _ => sideways,
+    };
+    let clear = |x: Vec3| {
+        envelope.depth(&to_rest(x), margin) == 0.0
+            && head.is_none_or(|h| !h.contains(&to_head(h, x), HEAD_MARGIN))
+    };
+    // The fingertip, kept off the head only (the hips' margin counts from the hand's joints).
+    let finger = envelope
+        .fingertips
+        .iter()
+        .find(|(j, _)| *j == arm.hand)
+        .map(|(_, f)| p[arm.hand] + g[arm.hand] * (f - rest[arm.hand]) - pivot);
+    let finger_clear =
+        |x: Vec3| head.is_none_or(|h| !h.contains(&to_head(h, x), HEAD_MARGIN / 2.0));
     for deg in 0..=MAX_OPEN_DEG {
         let phi = (deg as Real).to_radians();
-        let r = UnitQuat::from_axis_angle(&Vec3::z_axis(), side * phi);
-        if local
-            .iter()
-            .all(|&v| envelope.depth(&(pivot + r * v), margin) == 0.0)
+        let r = UnitQuat::from_scaled_axis(axis * phi);
+        if local.iter().all(|&v| clear(pivot + r * v))
+            && finger.is_none_or(|v| finger_clear(pivot + r * v))
         {
-            return phi;
+            return (phi, axis);
         }
     }
-    (MAX_OPEN_DEG as Real).to_radians()
+    ((MAX_OPEN_DEG as Real).to_radians(), axis)
 }
 
-/// Rotates the upper arm `upper` of `pose` by `angle` about the root's forward axis.
+/// Rotates the upper arm `upper` of `pose` by `angle` about the world axis `axis` (unit).
 fn open(
     skeleton: &Skeleton,
     rest: &[Vec3],
     pose: &mut Pose,
     upper: usize,
-    hips: usize,
+    axis: Vec3,
     angle: Real,
 ) {
     let (g, _) = forward(skeleton, rest, pose);
-    let axis = g[hips] * Vec3::z_axis();
-    let r = UnitQuat::from_axis_angle(&axis, angle);
+    let r = UnitQuat::from_scaled_axis(axis * angle);
     let parent = skeleton.parents[upper].map_or(UnitQuat::identity(), |q| g[q]);
     pose.local_rotations[upper] = parent.inverse() * r * g[upper];
 }

@@ -18,9 +18,10 @@ fn cylinder(radius: Real) -> Vec<Vec3> {
 }
 
 /// A skeleton with the mannequin's names: pelvis at (0, 1, 0), shoulders at x = +-0.15, y = 1.4,
-/// arms hanging straight down (elbow 0.3 m, wrist 0.55 m below the shoulder), legs below.
+/// arms hanging straight down (elbow 0.3 m, wrist 0.55 m below the shoulder), legs below, the
+/// head joint at y = 1.6.
 fn rig() -> (Skeleton, Vec<Vec3>) {
-    let joints: [(&str, Option<usize>, [Real; 3]); 16] = [
+    let joints: [(&str, Option<usize>, [Real; 3]); 18] = [
         (J::PELVIS, None, [0.0, 1.0, 0.0]),
         (J::SPINE1, Some(0), [0.0, 1.2, 0.0]),
         (J::CLAVICLE_L, Some(1), [0.05, 1.4, 0.0]),
@@ -37,6 +38,8 @@ fn rig() -> (Skeleton, Vec<Vec3>) {
         (J::THIGH_R, Some(0), [-0.1, 0.95, 0.0]),
         (J::SHIN_R, Some(13), [-0.1, 0.5, 0.0]),
         (J::FOOT_R, Some(14), [-0.1, 0.08, 0.0]),
+        (J::NECK, Some(1), [0.0, 1.5, 0.0]),
+        (J::HEAD, Some(16), [0.0, 1.6, 0.0]),
     ];
     let names: Vec<String> = joints.iter().map(|j| j.0.to_string()).collect();
     let parents: Vec<Option<usize>> = joints.iter().map(|j| j.1).collect();
@@ -150,4 +153,90 @@ fn the_smoothed_opening_never_falls_below_the_need_and_ramps_without_jumps() {
     assert!(steps <= 0.2 / 7.0 + 1e-12, "largest step {steps}");
     assert_eq!(s[0], 0.0);
     assert_eq!(s[29], 0.0);
+}
+
+/// The right arm posed with its wrist at `w` (world), the elbow out to the side: its upper arm's
+/// and forearm's local rotations.
+fn reach_to(s: &Skeleton, rest: &[Vec3], w: Vec3) -> Pose {
+    let (sh, el, wr) = (7, 8, 9);
+    let (lu, lf) = ((rest[el] - rest[sh]).norm(), (rest[wr] - rest[el]).norm());
+    let d = w - rest[sh];
+    let l = d.norm();
+    let x = (lu * lu - lf * lf + l * l) / (2.0 * l);
+    let h = (lu * lu - x * x).max(0.0).sqrt();
+    let dn = d / l;
+    let side = Vec3::new(-1.0, 0.0, 0.0);
+    let perp = (side - dn * dn.dot(&side)).normalize();
+    let elbow = rest[sh] + dn * x + perp * h;
+    let down = Vec3::new(0.0, -1.0, 0.0);
+    let gu = UnitQuat::rotation_between(&down, &(elbow - rest[sh])).unwrap();
+    let gf = UnitQuat::rotation_between(&down, &(w - elbow)).unwrap();
+    let mut pose = Pose::rest(s.names.len());
+    pose.local_rotations[sh] = gu;
+    pose.local_rotations[el] = gu.inverse() * gf;
+    pose
+}
+
+#[test]
+fn a_hand_retargeted_into_the_face_is_moved_out_of_the_head() {
+    let (s, rest) = rig();
+    let tips = vec![None; rest.len()];
+    // A head, an ellipsoid 16 x 22 x 18 cm around (0, 1.7, 0), and a body too narrow to need any
+    // opening.
+    let (c, r) = (Vec3::new(0.0, 1.7, 0.0), Vec3::new(0.08, 0.11, 0.09));
+    let mut surface = Vec::new();
+    for i in 0..=24 {
+        let lat = std::f64::consts::PI * i as Real / 24.0;
+        for k in 0..48 {
+            let lon = std::f64::consts::TAU * k as Real / 48.0;
+            let u = Vec3::new(lat.sin() * lon.cos(), lat.cos(), lat.sin() * lon.sin());
+            surface.push(c + u.component_mul(&r));
+        }
+    }
+    let head = Head::new(17, &surface).unwrap();
+    assert!((head.centre - c).norm() < 1e-9);
+    assert!(
+        head.contains(&(c + Vec3::new(0.0, 0.0, 0.085)), 0.0),
+        "the face"
+    );
+    assert!(
+        !head.contains(&(c + Vec3::new(0.0, 0.0, 0.12)), 0.0),
+        "in front of it"
+    );
+    assert!(
+        head.contains(&(c + Vec3::new(0.0, 0.0, 0.12)), 0.04),
+        "within the margin"
+    );
+    assert!(
+        !head.contains(&(c + Vec3::new(0.0, -0.2, 0.0)), 0.03),
+        "below the chin"
+    );
+    let mut e = Envelope::new(&cylinder(0.08), 1.3).unwrap();
+    let mut m = motion(&s, 10);
+    let wrist = Vec3::new(-0.03, 1.66, 0.05);
+    m.poses[3..7].fill(reach_to(&s, &rest, wrist));
+    let (_, p) = forward(&s, &rest, &m.poses[4]);
+    assert!((p[9] - wrist).norm() < 1e-9, "posed: wrist at {}", p[9]);
+    assert!(head.contains(&p[9], 0.0), "the wrist starts in the head");
+    // Without the head nothing moves.
+    let mut bare = m.clone();
+    assert_eq!(
+        keep_arms_clear(&mut bare, &rest, &tips, &e, 0.03, 2),
+        Clearance::default()
+    );
+    e.head = Some(head.clone());
+    let report = keep_arms_clear(&mut m, &rest, &tips, &e, 0.03, 2);
+    assert!(report.frames_opened > 0 && report.max_open_deg > 0.0);
+    for pose in &m.poses[3..7] {
+        let (_, p) = forward(&s, &rest, pose);
+        let tip = p[9] + (p[9] - p[8]) * 0.4;
+        for x in [p[8], p[9], tip, (p[8] + p[9]) / 2.0] {
+            assert!(!head.contains(&x, HEAD_MARGIN), "{x} in the head");
+        }
+        // Opened away from the midline, not across the face.
+        assert!(p[9].x < wrist.x, "wrist at {}", p[9]);
+        // The left arm and the rest of the body are untouched.
+        assert_eq!(pose.local_rotations[3], UnitQuat::identity());
+        assert_eq!(pose.local_rotations[0], UnitQuat::identity());
+    }
 }

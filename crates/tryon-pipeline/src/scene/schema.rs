@@ -512,7 +512,9 @@ pub struct BvhSpec {
     pub unit: Option<Real>,
     /// Arms are opened sideways, frame by frame and smoothly, until the elbow, wrist and hand
     /// joints lie at least this far (m) outside the body's rest shape (a source whose hips are
-    /// narrower than the body's would hang the hands inside the hips); 0 = off.
+    /// narrower than the body's would hang the hands inside the hips), and a hand raised to the
+    /// face is swung away from the head until the wrist is 3 cm and the fingertips 1.5 cm off it;
+    /// 0 = off.
     #[serde(default = "bvh_arm_clearance")]
     #[schemars(range(min = 0.0, max = 0.2))]
     pub arm_clearance: Real,
