@@ -14,7 +14,7 @@ use tryon_pipeline::run::Timers;
 use tryon_pipeline::scene::SolverName;
 use tryon_pipeline::{Pipeline, Scene};
 
-fn fresh(solver: SolverName) -> (Pipeline, LoopState, usize) {
+fn fresh(solver: SolverName) -> Run {
     // The coarse frame only (the surface stages have their own benchmark, `surface`).
     let mut scene = Scene::demo();
     scene.effects.refine = 0;
@@ -30,8 +30,40 @@ fn fresh(solver: SolverName) -> (Pipeline, LoopState, usize) {
     (p, st, first)
 }
 
+/// A pipeline, its loop state and the next frame to run.
+type Run = (Pipeline, LoopState, usize);
+
+/// The wall time of `iters` frames of `run`, each advanced inside `within` (a thread pool's
+/// `install`, or directly); `restart` rebuilds the run (untimed) when its clip ends, and the
+/// timing stops early when it cannot.
+fn timed_frames(
+    iters: u64,
+    run: &mut Run,
+    restart: &mut dyn FnMut() -> Option<Run>,
+    within: &dyn Fn(&mut (dyn FnMut() + Send)),
+) -> Duration {
+    let mut total = Duration::ZERO;
+    let mut timers = Timers::default();
+    for _ in 0..iters {
+        if run.2 >= run.0.frames {
+            let Some(again) = restart() else {
+                break;
+            };
+            *run = again;
+        }
+        let (p, st, k) = run;
+        let t0 = Instant::now();
+        within(&mut || {
+            std::hint::black_box(p.advance(st, p.frame_time(*k), &mut timers));
+        });
+        total += t0.elapsed();
+        *k += 1;
+    }
+    total
+}
+
 /// makehuman-dress-walk with `sets`, run untimed to frame 30 (`None` without the shared assets).
-fn makehuman(sets: &[&str]) -> Option<(Pipeline, LoopState, usize)> {
+fn makehuman(sets: &[&str]) -> Option<Run> {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../data/scenes/makehuman-dress-walk.toml");
     let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
@@ -67,28 +99,13 @@ fn makehuman_frame(c: &mut Criterion) {
         ),
     ];
     for (name, sets) in cases {
-        let Some((mut p, mut st, mut k)) = pool.install(|| makehuman(sets)) else {
+        let Some(mut run) = pool.install(|| makehuman(sets)) else {
             continue;
         };
         group.bench_function(name, |b| {
             b.iter_custom(|iters| {
-                let mut total = Duration::ZERO;
-                let mut timers = Timers::default();
-                for _ in 0..iters {
-                    if k >= p.frames {
-                        let Some(again) = pool.install(|| makehuman(sets)) else {
-                            break;
-                        };
-                        (p, st, k) = again;
-                    }
-                    let t0 = Instant::now();
-                    pool.install(|| {
-                        std::hint::black_box(p.advance(&mut st, p.frame_time(k), &mut timers))
-                    });
-                    total += t0.elapsed();
-                    k += 1;
-                }
-                total
+                let restart = &mut || pool.install(|| makehuman(sets));
+                timed_frames(iters, &mut run, restart, &|f| pool.install(f))
             })
         });
     }
@@ -106,21 +123,11 @@ fn demo_frame(c: &mut Criterion) {
         ("walk_dress_rk4", SolverName::P1),
         ("walk_dress_vbd", SolverName::Vbd),
     ] {
-        let (mut p, mut st, mut k) = fresh(solver);
+        let mut run = fresh(solver);
         group.bench_function(name, |b| {
             b.iter_custom(|iters| {
-                let mut total = Duration::ZERO;
-                let mut timers = Timers::default();
-                for _ in 0..iters {
-                    if k >= p.frames {
-                        (p, st, k) = fresh(solver);
-                    }
-                    let t0 = Instant::now();
-                    std::hint::black_box(p.advance(&mut st, p.frame_time(k), &mut timers));
-                    total += t0.elapsed();
-                    k += 1;
-                }
-                total
+                let restart = &mut || Some(fresh(solver));
+                timed_frames(iters, &mut run, restart, &|f| f())
             })
         });
     }
