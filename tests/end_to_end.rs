@@ -52,6 +52,7 @@ fn demo_runs_a_few_frames_stays_close_and_writes_outputs_that_read_back() {
         assert!(f.garment.iter().all(|x| x.iter().all(|c| c.is_finite())));
     }
     let m = &run.stats.metrics;
+    assert_eq!(run.stats.retarget, None, "a walk, not a captured clip");
     assert_eq!(m.non_finite_events, 0);
     assert!(
         m.max_penetration_m <= 0.002,

@@ -221,12 +221,21 @@ fn a_makehuman_walk_gives_the_same_frames_on_one_and_two_threads() {
         pool.install(move || {
             let mut p = tryon_pipeline::Pipeline::new(scene).unwrap();
             let out = p.run(Some(8), |_, _| {});
-            (out.frames, out.stats.metrics.body_pressed_per_pose)
+            let m = &out.stats;
+            (out.frames, m.metrics.body_pressed_per_pose, m.retarget)
         })
     };
     let one = run(1);
     // The press did act, so its parallel part was exercised.
     assert!(one.1.is_some_and(|m| m > 0.0), "{:?}", one.1);
+    // stats.json says what retargeting changed: this clip raises a hand to the face and the
+    // arms are turned off the hips and head in some frames, by at most the 45-degree cap.
+    assert!(
+        one.2
+            .is_some_and(|r| r.arm_frames_moved > 0 && r.max_arm_turn_deg <= 45.0),
+        "{:?}",
+        one.2
+    );
     assert!(run(2) == one, "two threads differ from one");
 }
 

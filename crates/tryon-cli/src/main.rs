@@ -156,6 +156,12 @@ fn run(mut p: Pipeline, out: &Path, frames: Option<usize>, quiet: bool) -> Resul
             m.rollbacks,
             m.non_finite_events
         );
+        if let Some(r) = s.retarget.filter(|r| r.arm_frames_moved > 0) {
+            println!(
+                "retargeting turned an upper arm in {} of the clip's frames (counted per arm; at most {:.0} degrees) to keep the arms off the hips and the hands off the head",
+                r.arm_frames_moved, r.max_arm_turn_deg
+            );
+        }
         if m.detached_share > 0.0 {
             let worst = s
                 .per_frame
@@ -163,7 +169,7 @@ fn run(mut p: Pipeline, out: &Path, frames: Option<usize>, quiet: bool) -> Resul
                 .max_by(|a, b| a.detached_share.total_cmp(&b.detached_share))
                 .map_or(0, |f| f.frame);
             eprintln!(
-                "warning: at frame {worst}, {} of the garment's vertices were more than 10 cm farther from the body than at the start (a hem swinging out, or the garment sliding off it)",
+                "warning: at frame {worst}, {} of the garment's vertices had left the body: more than 10 cm farther from it than at the start, and torn off, slid off what held them or fallen (stats.json per_frame has every frame)",
                 percent(m.detached_share)
             );
         }

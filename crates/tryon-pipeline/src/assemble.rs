@@ -90,6 +90,7 @@ impl Pipeline {
             body_mesh: body.mesh,
             body: body.model,
             motion: body.motion,
+            retarget: body.retarget,
             follower,
             collider,
             bands,

@@ -63,6 +63,8 @@ pub(crate) struct BuiltBody {
     pub motion: Option<Box<dyn MotionSource>>,
     pub makehuman: Option<body_model::MakeHumanBody>,
     pub clip_len: Real,
+    /// What retargeting a captured clip changed (`None` for other motions).
+    pub retarget: Option<crate::run::RetargetStats>,
 }
 
 /// A body that holds still at `mesh`.
@@ -77,6 +79,7 @@ fn fixed(mesh: PolyMesh, clip_len: Real) -> BuiltBody {
         motion: None,
         makehuman: None,
         clip_len,
+        retarget: None,
     }
 }
 
@@ -105,6 +108,7 @@ pub(crate) fn body(scene: &Scene) -> Result<BuiltBody, AssembleError> {
                 };
                 let r = real::bvh_motion(scene, bvh, &b.skeleton, &b.joint_rest, tips, Some(skin))?;
                 BuiltBody {
+                    retarget: Some(r.clearance.into()),
                     clip_len: r.duration(),
                     model: Box::new(press(b.skinned(), scene)),
                     motion: Some(Box::new(r)),
@@ -124,6 +128,7 @@ pub(crate) fn body(scene: &Scene) -> Result<BuiltBody, AssembleError> {
 fn mannequin(scene: &Scene, spec: &MannequinBody) -> Result<BuiltBody, AssembleError> {
     let m = spec.measurements();
     let man = Mannequin::new(&m)?;
+    let mut retarget = None;
     let motion: Box<dyn MotionSource> = match &scene.motion {
         MotionSection::Still(s) => {
             return Ok(fixed(man.mesh, s.duration.unwrap_or(2.0)));
@@ -141,18 +146,22 @@ fn mannequin(scene: &Scene, spec: &MannequinBody) -> Result<BuiltBody, AssembleE
             },
         )?),
         MotionSection::ArmRaise(a) => Box::new(ArmRaise::new(&man.skeleton, a.raise_deg)?),
-        MotionSection::Bvh(bvh) => Box::new(real::bvh_motion(
-            scene,
-            bvh,
-            &man.skeleton,
-            &man.joint_rest,
-            vec![None; man.joint_rest.len()],
-            Some(real::BodySkin {
-                points: &man.mesh.positions,
-                joints: &man.skin.joints,
-                weights: &man.skin.weights,
-            }),
-        )?),
+        MotionSection::Bvh(bvh) => {
+            let r = real::bvh_motion(
+                scene,
+                bvh,
+                &man.skeleton,
+                &man.joint_rest,
+                vec![None; man.joint_rest.len()],
+                Some(real::BodySkin {
+                    points: &man.mesh.positions,
+                    joints: &man.skin.joints,
+                    weights: &man.skin.weights,
+                }),
+            )?;
+            retarget = Some(r.clearance.into());
+            Box::new(r)
+        }
     };
     let (tris, _) = man.mesh.triangulate();
     let clip_len = motion.duration();
@@ -169,6 +178,7 @@ fn mannequin(scene: &Scene, spec: &MannequinBody) -> Result<BuiltBody, AssembleE
         motion: Some(motion),
         makehuman: None,
         clip_len,
+        retarget,
     })
 }
 

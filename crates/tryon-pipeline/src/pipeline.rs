@@ -35,6 +35,8 @@ pub struct Pipeline {
     pub body: Box<dyn BodyModel>,
     /// The motion posing the body; `None` when the body holds still (it is then never re-posed).
     pub motion: Option<Box<dyn MotionSource>>,
+    /// What retargeting a captured clip changed (`None` for other motions).
+    pub retarget: Option<crate::run::RetargetStats>,
     /// Body following (P1.3.4, with the root carry); only with a moving body.
     pub follower: Option<Box<dyn Follower>>,
     /// The cloth's body collider; `None` when the scene turns body collision off.

@@ -52,8 +52,8 @@ pub struct Metrics {
     pub max_stretch: Real,
     /// Smallest structural edge length / rest length over all frames.
     pub min_stretch: Real,
-    /// Largest share, over frames, of garment vertices more than 10 cm farther from the body than
-    /// where they started: 0 while the garment stays on.
+    /// Largest share, over frames, of garment vertices detached from the body (torn, slid or
+    /// fallen off; `crate::hold`): 0 while the garment stays on.
     pub detached_share: Real,
     /// Mean over frames of the mean structural stretch.
     pub mean_stretch: Real,
@@ -111,6 +111,25 @@ pub struct UntangleStats {
     pub farthest_m: Real,
 }
 
+/// What retargeting a captured clip onto the body changed (`mocap_retarget::clearance`): arms
+/// opened away from the body's hips and hands swung off its head.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct RetargetStats {
+    /// Clip frames, counted per arm, in which an arm was moved.
+    pub arm_frames_moved: usize,
+    /// The largest turn of an upper arm (degrees).
+    pub max_arm_turn_deg: Real,
+}
+
+impl From<mocap_retarget::clearance::Clearance> for RetargetStats {
+    fn from(c: mocap_retarget::clearance::Clearance) -> Self {
+        RetargetStats {
+            arm_frames_moved: c.frames_opened,
+            max_arm_turn_deg: c.max_open_deg,
+        }
+    }
+}
+
 /// Per-frame figures (for plots and regressions).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct FrameStats {
@@ -118,7 +137,7 @@ pub struct FrameStats {
     pub max_penetration_m: Real,
     pub p99_penetration_m: Real,
     pub max_stretch: Real,
-    /// Share of garment vertices more than 10 cm farther from the body than where they started.
+    /// Share of garment vertices detached from the body (`crate::hold`).
     pub detached_share: Real,
     /// Crossing pairs of garment triangles.
     pub cloth_intersections: usize,
@@ -138,6 +157,9 @@ pub struct Stats {
     pub substep_s: Real,
     pub collider: String,
     pub counts: Counts,
+    /// What retargeting the clip changed (absent for motions that are not captured clips).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub retarget: Option<RetargetStats>,
     /// Only the stages that ran.
     pub stages: BTreeMap<String, StageTime>,
     pub metrics: Metrics,
@@ -258,6 +280,7 @@ impl Pipeline {
                 .as_ref()
                 .map_or("none", |c| c.name())
                 .to_string(),
+            retarget: self.retarget,
             counts: Counts {
                 coarse_vertices: self.garment.positions.len(),
                 coarse_faces: self.garment.faces.len(),
