@@ -7,8 +7,9 @@
 //! arms), and the angles are smoothed over time so the correction never jerks. The head is kept
 //! clear the same way: a clip whose actor touches their face puts a retargeted hand, on a body of
 //! other proportions, into the head (CMU 131_01 on the MakeHuman body: the fingers in the face
-//! and the sleeve's cuff 27 mm inside it), so the wrist, forearm and fingertips are also kept
-//! [`HEAD_MARGIN`] outside the head at rest, an ellipsoid carried by the head joint.
+//! and the sleeve's cuff 27 mm inside it), so the wrist and forearm are also kept [`HEAD_MARGIN`]
+//! and the fingertip half of it outside the head at rest ([`Head`], carried by the head joint), a
+//! raised hand swinging away from the head.
 
 use crate::names::{Role, RoleMap};
 use crate::retarget::Retargeted;
@@ -20,8 +21,8 @@ use tryon_core::pose::{Pose, Skeleton};
 /// On makehuman-dress-walk 0.04 left the jacket pinched 19 mm into the hips; 0.07 clears them
 /// (openings of at most 10 degrees).
 pub const DEFAULT_MARGIN: Real = 0.07;
-/// How far outside the head's ellipsoid the wrist, forearm and fingertips are kept (m): a
-/// wrist's half-thickness and a sleeve.
+/// How far outside the head the wrist and forearm are kept (m): a wrist's half-thickness and a
+/// sleeve. The fingertip, with no sleeve, is kept half as far.
 pub const HEAD_MARGIN: Real = 0.03;
 /// Seconds either side over which openings are smoothed.
 pub const SMOOTHING_S: Real = 0.15;
