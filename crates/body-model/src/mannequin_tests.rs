@@ -6,6 +6,7 @@ use crate::girth::girth_at;
 use crate::mannequin::Mannequin;
 use crate::skin::SkinnedBody;
 use std::collections::HashSet;
+use tryon_core::frames::BodyFrame;
 use tryon_core::math::{Real, UnitQuat, Vec3};
 use tryon_core::measure::Measurements;
 use tryon_core::pose::Pose;
@@ -167,11 +168,8 @@ fn rest_pose_skins_to_the_rest_mesh_and_a_bent_pose_stays_finite() {
     assert!(posed.validate().is_ok());
 }
 
-/// The press's moves carried back to the rest mesh (`skin_offsets_at`, what the GLB stores as the
-/// body's morph targets) skin to the pressed body: plain skinning of the offset rest mesh equals
-/// the pressed shape, with the arms swung into the torso so that the press has work to do.
-#[test]
-fn skin_offsets_skin_to_the_pressed_body() {
+/// The mannequin with its arms swung into the torso, its parts set for the press.
+fn pressed_mannequin() -> (SkinnedBody, Pose) {
     let (m, mut body) = skinned_mannequin();
     // Parts by strongest joint: each arm from its upper arm down, the rest the torso.
     let parts: Vec<u8> = (0..m.mesh.positions.len())
@@ -190,6 +188,15 @@ fn skin_offsets_skin_to_the_pressed_body() {
     for (j, angle) in [(7, -0.6), (11, 0.6), (8, -0.3), (12, 0.3)] {
         pose.local_rotations[j] = UnitQuat::from_axis_angle(&Vec3::z_axis(), angle);
     }
+    (body, pose)
+}
+
+/// The press's moves carried back to the rest mesh (`skin_offsets_at`, what the GLB stores as the
+/// body's morph targets) skin to the pressed body: plain skinning of the offset rest mesh equals
+/// the pressed shape, with the arms swung into the torso so that the press has work to do.
+#[test]
+fn skin_offsets_skin_to_the_pressed_body() {
+    let (body, pose) = pressed_mannequin();
     let mut pressed = Vec::new();
     body.shape_at(&pose, &mut pressed);
     let mut offsets = Vec::new();
@@ -212,4 +219,29 @@ fn skin_offsets_skin_to_the_pressed_body() {
         .map(|(a, b)| (a - b).norm())
         .fold(0.0, Real::max);
     assert!(worst < 1e-9, "{worst}");
+}
+
+/// A shape kept by `shape_next` is what `pose` gives for that pose, press counts included, and
+/// is not taken for another pose.
+#[test]
+fn a_shape_made_for_the_next_pose_is_the_posed_body() {
+    let (mut body, pose) = pressed_mannequin();
+    let mut fresh = body.clone();
+    let mut end = Vec::new();
+    body.shape_next(&pose, &mut end);
+    let (mut a, mut b) = (BodyFrame::default(), BodyFrame::default());
+    body.pose(&pose, &mut a);
+    fresh.pose(&pose, &mut b);
+    assert_eq!(a.positions, b.positions);
+    assert_eq!(a.positions, end);
+    assert_eq!(body.corrections(), fresh.corrections());
+    assert!(body.corrections().is_some_and(|c| c.moved > 20));
+    // Kept for one pose only: another pose is skinned afresh.
+    let mut other = pose.clone();
+    other.local_rotations[7] = UnitQuat::identity();
+    body.shape_next(&pose, &mut end);
+    body.pose(&other, &mut a);
+    fresh.pose(&other, &mut b);
+    assert_eq!(a.positions, b.positions);
+    assert_ne!(a.positions, end);
 }

@@ -105,6 +105,8 @@ pub struct SkinnedBody {
     /// Poses the press ran on.
     pub pressed_poses: usize,
     last: Option<(Real, Vec<Vec3>)>,
+    /// The shape `shape_next` made, with its pose and what the press did there, for `pose`.
+    next: Option<(Pose, Vec<Vec3>, Option<Pressed>)>,
 }
 
 impl SkinnedBody {
@@ -126,6 +128,7 @@ impl SkinnedBody {
             pressed: Pressed::default(),
             pressed_poses: 0,
             last: None,
+            next: None,
         }
     }
 
@@ -152,12 +155,30 @@ impl SkinnedBody {
     }
 }
 
+/// Whether two poses give the same shape (the same root and joint rotations; the time aside).
+fn same_joints(a: &Pose, b: &Pose) -> bool {
+    a.root_translation == b.root_translation && a.local_rotations == b.local_rotations
+}
+
+impl SkinnedBody {
+    /// The body in `pose`, skinned and pressed, and what the press did.
+    fn shape_pressed(&self, pose: &Pose, out: &mut Vec<Vec3>) -> Option<Pressed> {
+        self.skin_into(pose, out);
+        self.press.as_ref().map(|p| p.apply(out, &self.triangles))
+    }
+}
+
 impl BodyModel for SkinnedBody {
     fn pose(&mut self, pose: &Pose, out: &mut BodyFrame) {
         out.time = pose.time;
-        self.skin_into(pose, &mut out.positions);
-        if let Some(press) = &self.press {
-            let r = press.apply(&mut out.positions, &self.triangles);
+        let pressed = match self.next.take() {
+            Some((p, x, r)) if same_joints(&p, pose) => {
+                out.positions.clone_from(&x);
+                r
+            }
+            _ => self.shape_pressed(pose, &mut out.positions),
+        };
+        if let Some(r) = pressed {
             self.pressed.moved += r.moved;
             self.pressed.deepest = self.pressed.deepest.max(r.deepest);
             self.pressed_poses += 1;
@@ -179,10 +200,13 @@ impl BodyModel for SkinnedBody {
         }
     }
     fn shape_at(&self, pose: &Pose, out: &mut Vec<Vec3>) {
-        self.skin_into(pose, out);
-        if let Some(press) = &self.press {
-            press.apply(out, &self.triangles);
-        }
+        self.shape_pressed(pose, out);
+    }
+    fn shape_next(&mut self, pose: &Pose, out: &mut Vec<Vec3>) {
+        let r = self.shape_pressed(pose, out);
+        let mut kept = self.next.take().map(|(_, x, _)| x).unwrap_or_default();
+        kept.clone_from(out);
+        self.next = Some((pose.clone(), kept, r));
     }
     /// The press's moves in `pose`, carried back through each vertex's blended joint rotation to
     /// the rest mesh: skinning the rest mesh plus these offsets gives the pressed body exactly

@@ -27,6 +27,12 @@ pub trait BodyModel: Send {
     /// The body's positions in `pose`, leaving the model's state (its velocity estimate) alone: for
     /// exports and pictures of recorded frames.
     fn shape_at(&self, pose: &Pose, out: &mut Vec<Vec3>);
+    /// `shape_at` for the pose the body is posed in next (the pipeline asks where a frame ends
+    /// before moving the body there): a model may keep the shape, and a following `pose` with the
+    /// same joints and root takes it instead of deforming the body again.
+    fn shape_next(&mut self, pose: &Pose, out: &mut Vec<Vec3>) {
+        self.shape_at(pose, out);
+    }
     /// The skeleton and skin weights, when the body is skinned (exports write a skinned mesh; the
     /// follower carries the cloth with the root joint).
     fn rig(&self) -> Option<Rig<'_>> {

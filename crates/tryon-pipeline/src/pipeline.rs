@@ -204,7 +204,11 @@ impl Pipeline {
         let parts = self.body_parts(st, t, timers);
         let mut report = StepReport::default();
         for i in 1..=parts {
-            let ti = t - dt + dt * i as Real / parts as Real;
+            // The last part ends exactly at `t` (the pose `body_parts` shaped the body in).
+            let ti = match i == parts {
+                true => t,
+                false => t - dt + dt * i as Real / parts as Real,
+            };
             report.accumulate(&self.advance_part(st, ti, dt / parts as Real, timers));
         }
         report.body_parts = parts as u32;
@@ -234,11 +238,12 @@ impl Pipeline {
             return 1;
         };
         let settle = self.scene.scene.settle;
-        let (body, end) = (&self.body, &mut self.end_shape);
+        let (body, end) = (&mut self.body, &mut self.end_shape);
         timers.time("skinning", || {
             let mut pose = st.pose.clone();
             motion.sample((t - settle).max(0.0), &mut pose);
-            body.shape_at(&pose, end);
+            // Kept by the body: the last sub-frame's `pose` takes it instead of skinning again.
+            body.shape_next(&pose, end);
         });
         // Only the body near the cloth counts (a dress does not care how fast the feet move): its
         // vertices inside the cloth's bounding box grown by a tenth of a metre.

@@ -100,3 +100,32 @@ fn non_finite_positions_and_short_part_lists_do_not_panic() {
             .all(|(v, p)| v == 3 || p.iter().all(|c| c.is_finite()))
     );
 }
+
+#[test]
+fn the_parts_around_a_cell_are_those_of_its_27_cells() {
+    // Scattered points of five parts, in a grid several cells wide each way.
+    let x: Vec<Vec3> = (0..400)
+        .map(|i| {
+            let f = i as Real;
+            Vec3::new(
+                (f * 0.37).sin() * 0.1,
+                (f * 0.71).cos() * 0.08,
+                (f * 0.13).sin() * 0.12,
+            )
+        })
+        .collect();
+    let parts: Vec<u8> = (0..x.len()).map(|i| (i % 5) as u8).collect();
+    let grid = Grid::new(&x, &parts).expect("finite points");
+    assert!(grid.dims.iter().all(|&d| d >= 3), "{:?}", grid.dims);
+    let fast = grid.masks_around();
+    let d = grid.dims;
+    for (c, m) in fast.iter().enumerate() {
+        let at = [
+            c as i64 % d[0],
+            (c as i64 / d[0]) % d[1],
+            c as i64 / (d[0] * d[1]),
+        ];
+        let slow = grid.around(at).fold(0u32, |m, k| m | grid.mask[k]);
+        assert_eq!(*m, slow, "cell {at:?}");
+    }
+}
