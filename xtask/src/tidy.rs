@@ -17,6 +17,7 @@ const STAGES: &[&str] = &[
     "wrinkle",
     "mocap-retarget",
     "garment-fit",
+    "fold",
 ];
 const MAY_PRINT: &[&str] = &["tryon-cli", "tryon-tradeoff", "xtask"];
 /// The scene reference generated from the schema.

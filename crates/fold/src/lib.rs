@@ -1,0 +1,288 @@
+//! P3 (../shared/PAPERS.md, P3): folds added to a cloth model from lines a user draws where a
+//! fold's ridge or valley should run. Algorithm 1 of the paper, step by step:
+//!
+//! 1. the line, snapped to the garment's surface and followed across it (`path`);
+//! 2. mass points added where it crosses the mesh's edges and the faces it crosses subdivided,
+//!    so the line becomes a chain of mesh edges (`split`; the mesh stays conforming and manifold),
+//!    the new points then moved along the normal, out for a ridge and in for a valley: a spiky
+//!    fold (`displace`);
+//! 3. local Laplacian smoothing of the new points and their neighbourhood, repeated as often as
+//!    asked, each round with or without Taubin's hierarchical constraint (new points see only new
+//!    points, so the ridge is smoothed along its length and not pulled back into the surface)
+//!    (`smooth`);
+//! 4. the parameters: mass per unit area uniform again (the cloth model lumps each particle's
+//!    mass from its faces' areas, so it is by construction), and the bend springs that cross the
+//!    line shortened and stiffened ([`BendEdit`]);
+//! 5. the simulation (the pipeline's cloth solver); how much of the fold it keeps is measured by
+//!    [`fold_height`] (the paper's open problem: the simulation drifting from the drawn shape).
+//!
+//! The paper works on a grid of quads; here the faces a line crosses are split into triangles
+//! first, the rest of the mesh is left as it was.
+
+mod height;
+mod path;
+mod smooth;
+mod split;
+#[cfg(test)]
+mod tests;
+
+pub use height::{fold_height, fold_retention};
+pub use smooth::{Round, smooth_round};
+
+use thiserror::Error;
+use tryon_core::math::{Real, Vec3, vertex_normals};
+use tryon_core::mesh::PolyMesh;
+use tryon_core::topology::{Topology, TopologyError};
+
+/// Which way a fold stands out of the surface.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FoldKind {
+    /// Out along the surface normal (the front side's).
+    Ridge,
+    /// In, against the normal.
+    Valley,
+}
+
+/// One drawn fold: a polyline of points on (or near) the garment's surface.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FoldLine {
+    pub kind: FoldKind,
+    /// The line's points in order (m); each is snapped to the nearest surface point.
+    pub points: Vec<Vec3>,
+    /// How far the ridge stands out of the surface, or the valley in (m, > 0).
+    pub height: Real,
+}
+
+/// How the folds are shaped and held.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FoldParams {
+    /// Smoothing rounds in order, each plain or under Taubin's constraint.
+    pub rounds: Vec<Round>,
+    /// Each round moves a vertex this fraction of the way to its neighbours' mean.
+    pub lambda: Real,
+    /// How many rings of old vertices around the new ones are smoothed.
+    pub rings: u32,
+    /// Farthest a line's point may be from the surface (m).
+    pub snap: Real,
+    /// Rest length of the bend springs crossing a line, as a multiple of their folded length.
+    pub bend_shorten: Real,
+    /// Their stiffness, as a multiple of the other bend springs'.
+    pub bend_stiffen: Real,
+}
+
+impl Default for FoldParams {
+    fn default() -> Self {
+        FoldParams {
+            rounds: vec![Round::Constrained; 4],
+            lambda: 0.5,
+            rings: 2,
+            snap: 0.05,
+            bend_shorten: 0.9,
+            bend_stiffen: 10.0,
+        }
+    }
+}
+
+/// A bend spring to change: the one joining `a` and `b` (a < b), the two vertices opposite an
+/// edge of a fold's ridge.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BendEdit {
+    pub a: u32,
+    pub b: u32,
+    pub rest_scale: Real,
+    pub stiffness_scale: Real,
+}
+
+/// One fold as built.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Fold {
+    /// The vertices along the line, in order: the ridge (or valley) line.
+    pub ridge: Vec<u32>,
+    /// The drawn height, signed: positive for a ridge, negative for a valley (m).
+    pub drawn: Real,
+}
+
+/// A mesh with folds.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Folded {
+    /// The subdivided mesh: the original vertices keep their indices, new ones follow.
+    pub mesh: PolyMesh,
+    pub folds: Vec<Fold>,
+    /// Per vertex, whether it is on a line: added there, or an old vertex the line passed
+    /// within 15% of an edge's length of (the line then takes it).
+    pub is_new: Vec<bool>,
+    /// Per vertex, whether smoothing may move it (new vertices and `rings` rings around them,
+    /// less the mesh's open boundary).
+    pub region: Vec<bool>,
+}
+
+/// Why a fold could not be made. Folds are counted from 0 in the order given.
+#[derive(Debug, Error, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum FoldError {
+    #[error("fold {fold}: a line needs at least two points, it has {count}")]
+    TooFewPoints { fold: usize, count: usize },
+    #[error("fold {fold}: point {point} is not finite ({value:?})")]
+    NonFinitePoint {
+        fold: usize,
+        point: usize,
+        value: [Real; 3],
+    },
+    #[error(
+        "fold {fold}: height {height} is not allowed (a finite height above 0 and at most 1 m)"
+    )]
+    BadHeight { fold: usize, height: Real },
+    #[error(
+        "fold {fold}: point {point} is {distance:.3} m from the garment (at most {allowed} m is snapped to it)"
+    )]
+    OffGarment {
+        fold: usize,
+        point: usize,
+        distance: Real,
+        allowed: Real,
+    },
+    #[error("fold {fold}: the line leaves the garment over its edge between points {segment} and {}", segment + 1)]
+    LeavesGarment { fold: usize, segment: usize },
+    #[error(
+        "fold {fold}: the line crosses itself or turns back on itself between points {segment} and {}",
+        segment + 1
+    )]
+    SelfCrossing { fold: usize, segment: usize },
+    #[error("fold {fold}: the line crosses fold {other}")]
+    CrossesFold { fold: usize, other: usize },
+    #[error(
+        "fold {fold}: the line crosses {crossed} edges of the mesh; a fold needs at least 2 (draw it across at least two faces)"
+    )]
+    TooShort { fold: usize, crossed: usize },
+    #[error("garment mesh: {0}")]
+    Mesh(#[from] TopologyError),
+    #[error("smoothing: lambda {0} is not in (0, 1]")]
+    BadLambda(Real),
+}
+
+/// Subdivides `mesh` along every line and raises (or lowers) the new vertices by the line's
+/// height: the spiky fold of Algorithm 1 step 2, before any smoothing.
+pub fn subdivide(mesh: &PolyMesh, lines: &[FoldLine], p: &FoldParams) -> Result<Folded, FoldError> {
+    if !(p.lambda > 0.0 && p.lambda <= 1.0) {
+        return Err(FoldError::BadLambda(p.lambda));
+    }
+    for (f, l) in lines.iter().enumerate() {
+        check_line(f, l)?;
+    }
+    Topology::build(mesh)?;
+    let crossings = path::walk_all(mesh, lines, p.snap)?;
+    let mut out = split::split_along(mesh, &crossings);
+    displace(&mut out, lines);
+    out.region = smooth::region(&out, p.rings);
+    Ok(out)
+}
+
+/// [`subdivide`], then `p.rounds` of smoothing: the fold ready to simulate.
+pub fn build(mesh: &PolyMesh, lines: &[FoldLine], p: &FoldParams) -> Result<Folded, FoldError> {
+    let mut out = subdivide(mesh, lines, p)?;
+    let ring = ring_of(&out.mesh);
+    for &r in &p.rounds {
+        smooth_round(
+            &mut out.mesh.positions,
+            &ring,
+            &out.is_new,
+            &out.region,
+            r,
+            p.lambda,
+        );
+    }
+    Ok(out)
+}
+
+/// The bend springs crossing each fold's line (those spanning an edge of its ridge), with
+/// `p`'s changes.
+pub fn bend_edits(folded: &Folded, p: &FoldParams) -> Vec<BendEdit> {
+    let (tris, _) = folded.mesh.triangulate();
+    let mut out = Vec::new();
+    for f in &folded.folds {
+        for w in f.ridge.windows(2) {
+            let (u, v) = (w[0], w[1]);
+            let opposite: Vec<u32> = tris
+                .iter()
+                .filter(|t| t.contains(&u) && t.contains(&v))
+                .filter_map(|t| t.iter().copied().find(|&x| x != u && x != v))
+                .collect();
+            if let [a, b] = opposite[..] {
+                out.push(BendEdit {
+                    a: a.min(b),
+                    b: a.max(b),
+                    rest_scale: p.bend_shorten,
+                    stiffness_scale: p.bend_stiffen,
+                });
+            }
+        }
+    }
+    out.sort_by_key(|e| (e.a, e.b));
+    out.dedup_by_key(|e| (e.a, e.b));
+    out
+}
+
+/// Each vertex's neighbours in `mesh` (its one-ring), for smoothing.
+pub fn ring_of(mesh: &PolyMesh) -> Vec<Vec<u32>> {
+    let mut ring = vec![Vec::new(); mesh.positions.len()];
+    for f in &mesh.faces {
+        let vs = f.vertices();
+        for k in 0..vs.len() {
+            let (a, b) = (vs[k] as usize, vs[(k + 1) % vs.len()] as usize);
+            if a < ring.len() && b < ring.len() {
+                ring[a].push(b as u32);
+                ring[b].push(a as u32);
+            }
+        }
+    }
+    for r in &mut ring {
+        r.sort_unstable();
+        r.dedup();
+    }
+    ring
+}
+
+fn check_line(fold: usize, l: &FoldLine) -> Result<(), FoldError> {
+    if l.points.len() < 2 {
+        return Err(FoldError::TooFewPoints {
+            fold,
+            count: l.points.len(),
+        });
+    }
+    if let Some((point, p)) = l
+        .points
+        .iter()
+        .enumerate()
+        .find(|(_, p)| !p.iter().all(|c| c.is_finite()))
+    {
+        return Err(FoldError::NonFinitePoint {
+            fold,
+            point,
+            value: [p.x, p.y, p.z],
+        });
+    }
+    if !(l.height > 0.0 && l.height <= 1.0) {
+        return Err(FoldError::BadHeight {
+            fold,
+            height: l.height,
+        });
+    }
+    Ok(())
+}
+
+/// The new vertices moved along the subdivided surface's normal by their line's height.
+fn displace(out: &mut Folded, lines: &[FoldLine]) {
+    let (tris, _) = out.mesh.triangulate();
+    let mut normals = Vec::new();
+    vertex_normals(&out.mesh.positions, &tris, &mut normals);
+    for (f, l) in out.folds.iter_mut().zip(lines) {
+        f.drawn = match l.kind {
+            FoldKind::Ridge => l.height,
+            FoldKind::Valley => -l.height,
+        };
+        for &v in &f.ridge {
+            let n = normals[v as usize];
+            out.mesh.positions[v as usize] += n * f.drawn;
+        }
+    }
+}

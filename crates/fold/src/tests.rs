@@ -1,0 +1,311 @@
+//! Tests of building folds: subdivision keeps the mesh whole, the ridge is a chain of edges, the
+//! constraint keeps the ridge's height while plain smoothing lowers it, only springs across the
+//! line change, and bad lines are errors naming the fold.
+
+use super::*;
+use proptest::prelude::*;
+use tryon_core::mesh::grid_xz;
+use tryon_core::shapes::icosphere;
+
+/// A 1 m sheet of 20 x 20 quads in the XZ plane, facing +Y.
+fn sheet() -> PolyMesh {
+    grid_xz(20, 20, 1.0, 1.0, 0.0)
+}
+
+fn ridge(points: &[[Real; 3]], height: Real) -> FoldLine {
+    FoldLine {
+        kind: FoldKind::Ridge,
+        points: points.iter().map(|p| Vec3::new(p[0], p[1], p[2])).collect(),
+        height,
+    }
+}
+
+/// A ridge across the sheet's middle, slightly off the grid lines.
+fn across() -> FoldLine {
+    ridge(
+        &[[-0.4, 0.0, 0.013], [0.0, 0.0, 0.031], [0.4, 0.0, 0.017]],
+        0.04,
+    )
+}
+
+fn edges(mesh: &PolyMesh) -> std::collections::HashSet<(u32, u32)> {
+    let mut out = std::collections::HashSet::new();
+    for f in &mesh.faces {
+        let vs = f.vertices();
+        for k in 0..vs.len() {
+            let (a, b) = (vs[k], vs[(k + 1) % vs.len()]);
+            out.insert((a.min(b), a.max(b)));
+        }
+    }
+    out
+}
+
+fn height_of(f: &Folded, k: usize) -> Real {
+    let (tris, _) = f.mesh.triangulate();
+    fold_height(&f.mesh.positions, &tris, &f.folds[k].ridge, 4).expect("a measurable fold")
+}
+
+#[test]
+fn subdivision_keeps_the_sheet_manifold_and_the_ridge_a_chain_of_edges() {
+    let mesh = sheet();
+    let before = Topology::build(&mesh).unwrap();
+    let f = subdivide(&mesh, &[across()], &FoldParams::default()).unwrap();
+    let after = Topology::build(&f.mesh).expect("manifold after the split");
+    // The line stays inside the sheet: its open boundary is the same length.
+    assert_eq!(before.boundary_edges.len(), after.boundary_edges.len());
+    let ridge = &f.folds[0].ridge;
+    assert!(
+        ridge.len() >= 30,
+        "{} crossings for 0.8 m over 5 cm cells",
+        ridge.len()
+    );
+    let e = edges(&f.mesh);
+    for w in ridge.windows(2) {
+        assert!(
+            e.contains(&(w[0].min(w[1]), w[0].max(w[1]))),
+            "{w:?} not joined"
+        );
+    }
+    // Vertices off the line keep their places; every vertex on it is on the ridge.
+    for (v, p) in mesh.positions.iter().enumerate() {
+        assert!(f.is_new[v] || f.mesh.positions[v] == *p);
+    }
+    assert_eq!(f.is_new.iter().filter(|b| **b).count(), ridge.len());
+    // Spiky: the new vertices stand the drawn height above the plane.
+    for &v in ridge {
+        assert!((f.mesh.positions[v as usize].y - 0.04).abs() < 1e-12);
+    }
+    // Total area of the flat sheet kept by the split (measured before displacement).
+    let flat = {
+        let mut m = f.mesh.clone();
+        m.positions.iter_mut().for_each(|p| p.y = 0.0);
+        assert!(
+            Topology::build(&m).is_ok(),
+            "no face folded flat to nothing"
+        );
+        (0..m.faces.len()).map(|i| m.face_area(i)).sum::<Real>()
+    };
+    assert!((flat - 1.0).abs() < 1e-9, "{flat}");
+}
+
+#[test]
+fn a_fold_on_a_closed_surface_leaves_it_closed() {
+    let ball = icosphere(0.3, 3, Vec3::zeros());
+    let line = ridge(
+        &[[-0.25, 0.2, 0.1], [0.0, 0.3, 0.05], [0.25, 0.2, 0.0]],
+        0.02,
+    );
+    let f = subdivide(&ball, &[line], &FoldParams::default()).unwrap();
+    let topo = Topology::build(&f.mesh).expect("manifold");
+    assert!(topo.is_closed());
+    assert!(f.folds[0].ridge.len() > 5);
+    // Outward: the ridge's vertices end farther from the centre than the sphere.
+    for &v in &f.folds[0].ridge {
+        assert!(f.mesh.positions[v as usize].norm() > 0.3);
+    }
+}
+
+#[test]
+fn the_constraint_keeps_the_ridge_height_and_plain_smoothing_lowers_it() {
+    let base = FoldParams {
+        rounds: vec![],
+        ..FoldParams::default()
+    };
+    let spiky = build(&sheet(), &[across()], &base).unwrap();
+    let h0 = height_of(&spiky, 0);
+    assert!((h0 - 0.04).abs() < 1e-9, "spiky {h0}");
+    let with = |r: Round| FoldParams {
+        rounds: vec![r; 6],
+        ..base.clone()
+    };
+    let held = build(&sheet(), &[across()], &with(Round::Constrained)).unwrap();
+    let plain = build(&sheet(), &[across()], &with(Round::Plain)).unwrap();
+    let (hc, hp) = (height_of(&held, 0), height_of(&plain, 0));
+    assert!(hc > 0.95 * h0, "constrained {hc} of {h0}");
+    assert!(hp < 0.5 * h0, "plain {hp} of {h0}");
+    // Constrained smoothing widened the fold: old vertices next to the ridge were drawn up.
+    let lifted = held
+        .mesh
+        .positions
+        .iter()
+        .zip(&held.is_new)
+        .filter(|(p, n)| !**n && p.y > 0.005)
+        .count();
+    assert!(lifted > 20, "{lifted}");
+}
+
+#[test]
+fn a_valley_goes_in_and_measures_negative() {
+    let mut line = across();
+    line.kind = FoldKind::Valley;
+    let f = build(&sheet(), &[line], &FoldParams::default()).unwrap();
+    assert!(f.folds[0].drawn < 0.0);
+    let h = height_of(&f, 0);
+    assert!(h < -0.03, "{h}");
+    assert!(fold_retention(h, f.folds[0].drawn) > 0.75);
+}
+
+#[test]
+fn only_bend_springs_across_the_line_change() {
+    let f = build(&sheet(), &[across()], &FoldParams::default()).unwrap();
+    let edits = bend_edits(&f, &FoldParams::default());
+    assert!(edits.len() + 2 >= f.folds[0].ridge.len(), "{}", edits.len());
+    // The line runs along x near z = 0.02: each spring joins a vertex on either side of it, and
+    // neither end is on the ridge.
+    let line_z = |x: Real| {
+        if x < 0.0 {
+            0.013 + (0.031 - 0.013) * (x + 0.4) / 0.4
+        } else {
+            0.031 + (0.017 - 0.031) * x / 0.4
+        }
+    };
+    for e in &edits {
+        let (a, b) = (
+            f.mesh.positions[e.a as usize],
+            f.mesh.positions[e.b as usize],
+        );
+        assert!(!f.is_new[e.a as usize] && !f.is_new[e.b as usize]);
+        let (sa, sb) = (a.z - line_z(a.x), b.z - line_z(b.x));
+        assert!(sa * sb < 0.0, "{a:?} {b:?} on one side");
+        assert_eq!((e.rest_scale, e.stiffness_scale), (0.9, 10.0));
+    }
+}
+
+#[test]
+fn bad_lines_are_errors_naming_the_fold() {
+    let p = FoldParams::default();
+    let m = sheet();
+    let ok = across();
+    let mut lines = vec![ok.clone(), ridge(&[[0.0, 0.0, 0.3]], 0.02)];
+    let e = subdivide(&m, &lines, &p).unwrap_err();
+    assert_eq!(e, FoldError::TooFewPoints { fold: 1, count: 1 });
+    lines[1] = ridge(&[[0.0, 0.0, 0.3], [Real::NAN, 0.0, 0.3]], 0.02);
+    assert!(matches!(
+        subdivide(&m, &lines, &p),
+        Err(FoldError::NonFinitePoint {
+            fold: 1,
+            point: 1,
+            ..
+        })
+    ));
+    for h in [0.0, -0.01, Real::NAN, 2.0] {
+        lines[1] = ridge(&[[0.0, 0.0, 0.3], [0.2, 0.0, 0.3]], h);
+        assert!(
+            matches!(
+                subdivide(&m, &lines, &p),
+                Err(FoldError::BadHeight { fold: 1, .. })
+            ),
+            "{h}"
+        );
+    }
+    lines[1] = ridge(&[[0.0, 0.0, 0.3], [0.2, 0.5, 0.3]], 0.02);
+    let e = subdivide(&m, &lines, &p).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            FoldError::OffGarment {
+                fold: 1,
+                point: 1,
+                ..
+            }
+        ),
+        "{e}"
+    );
+    assert!(e.to_string().contains("fold 1: point 1 is 0.500 m"), "{e}");
+    // 2 cm past the sheet's edge is snapped onto it.
+    lines[1] = ridge(&[[0.0, 0.0, 0.3], [0.52, 0.0, 0.3]], 0.02);
+    assert!(subdivide(&m, &lines, &p).is_ok());
+    // Across a slot cut into the sheet: the line would leave the cloth.
+    let mut slotted = m.clone();
+    slotted.faces.retain(|f| {
+        let c = f
+            .vertices()
+            .iter()
+            .map(|&v| m.positions[v as usize])
+            .sum::<Vec3>()
+            / 4.0;
+        !(c.x.abs() < 0.1 && c.z > 0.2)
+    });
+    lines[1] = ridge(&[[-0.3, 0.0, 0.35], [0.3, 0.0, 0.35]], 0.02);
+    let e = subdivide(&slotted, &lines, &p).unwrap_err();
+    assert_eq!(
+        e,
+        FoldError::LeavesGarment {
+            fold: 1,
+            segment: 0
+        }
+    );
+    lines[1] = ridge(&[[0.0, 0.0, 0.3], [0.2, 0.0, 0.3], [0.05, 0.0, 0.31]], 0.02);
+    assert!(matches!(
+        subdivide(&m, &lines, &p),
+        Err(FoldError::SelfCrossing {
+            fold: 1,
+            segment: 1
+        })
+    ));
+    lines[1] = ridge(&[[0.0, 0.0, -0.2], [0.0, 0.0, 0.2]], 0.02);
+    let along = subdivide(&m, &lines[1..], &p).unwrap();
+    // Drawn along a grid line, the fold takes the grid's vertices: nothing is added.
+    assert_eq!(along.mesh.positions.len(), m.positions.len());
+    assert!(
+        along.folds[0].ridge.len() >= 8,
+        "{:?}",
+        along.folds[0].ridge
+    );
+    assert_eq!(
+        subdivide(&m, &lines, &p).unwrap_err(),
+        FoldError::CrossesFold { fold: 1, other: 0 }
+    );
+    lines[1] = ridge(&[[0.101, 0.0, 0.301], [0.102, 0.0, 0.302]], 0.02);
+    assert!(matches!(
+        subdivide(&m, &lines, &p),
+        Err(FoldError::TooShort {
+            fold: 1,
+            crossed: 0
+        })
+    ));
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(128))]
+
+    /// Random lines on random sheets either build a fold with finite positions and a manifold
+    /// mesh, or are refused with an error; never NaN, never a panic.
+    #[test]
+    fn random_lines_on_random_sheets_never_give_nan(
+        nx in 2usize..16, nz in 2usize..16,
+        pts in proptest::collection::vec((-0.7f64..0.7, -0.05f64..0.05, -0.7f64..0.7), 2..6),
+        height in 0.001f64..0.2,
+        rounds in proptest::collection::vec(any::<bool>(), 0..5),
+        valley in any::<bool>(),
+        sorted in any::<bool>(),
+    ) {
+        let mesh = grid_xz(nx, nz, 1.0, 1.0, 0.0);
+        let mut pts = pts;
+        if sorted {
+            // Most lines a person draws run one way.
+            pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        }
+        let line = FoldLine {
+            kind: if valley { FoldKind::Valley } else { FoldKind::Ridge },
+            points: pts.iter().map(|&(x, y, z)| Vec3::new(x, y, z)).collect(),
+            height,
+        };
+        let p = FoldParams {
+            rounds: rounds.iter().map(|&c| if c { Round::Constrained } else { Round::Plain }).collect(),
+            snap: 0.3,
+            ..FoldParams::default()
+        };
+        if let Ok(f) = build(&mesh, &[line], &p) {
+            prop_assert!(f.mesh.positions.iter().all(|v| v.iter().all(|c| c.is_finite())));
+            prop_assert!(Topology::build(&f.mesh).is_ok());
+            let e = edges(&f.mesh);
+            for w in f.folds[0].ridge.windows(2) {
+                prop_assert!(e.contains(&(w[0].min(w[1]), w[0].max(w[1]))));
+            }
+            for b in bend_edits(&f, &p) {
+                prop_assert!(b.a < b.b && (b.b as usize) < f.mesh.positions.len());
+            }
+        }
+    }
+}
