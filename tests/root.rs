@@ -3,6 +3,7 @@
 
 mod cloth_cloth;
 mod end_to_end;
+mod folds;
 mod hard_cases;
 mod makehuman_body;
 mod real_assets;

@@ -8,6 +8,7 @@
 //! Euler), Provot's strain limit, Coulomb friction, pins and kinematic handles, and a stability guard
 //! that rejects and halves any substep whose state is non-finite or exploding.
 
+pub mod bends;
 pub mod forces;
 pub mod hinges;
 pub mod integrator;

@@ -1,14 +1,18 @@
 //! How high a fold stands: the paper's open problem is that simulation may drift far from the
 //! drawn shape, so the height is measured the same way on the drawn fold and after simulation.
-//! Per ridge vertex (its ends aside), the surrounding surface is the six vertices nearest it among
-//! those `reach` edges from the ridge (outside the smoothed region): their centroid and mean
-//! normal give a local plane, and the vertex's signed distance from it is its height (positive
-//! out along the normal). The fold's height is the median over its vertices.
+//! Per ridge vertex (its ends aside), the surrounding surface is taken from the sixteen vertices
+//! nearest it among those `reach` to `reach + 2` edges from the ridge (outside the smoothed
+//! region): a quadratic height field over their mean tangent plane, fitted by least squares, so
+//! that a curved garment (a tube skirt) is not mistaken for a fold; the vertex's height above it
+//! along the plane's normal is its height (positive out along the normal), over a plane where the
+//! quadric cannot be fitted. The fold's height is the median over its vertices.
 
 use tryon_core::math::{Real, Vec3, vertex_normals};
 
 /// Reference vertices per ridge vertex.
-const NEAREST: usize = 6;
+const NEAREST: usize = 16;
+/// Rings of reference vertices, from `reach` out.
+const RINGS: u32 = 3;
 
 /// The fold's height over the surrounding surface (m; negative for a valley), or `None` when
 /// the ridge has fewer than three vertices or no surface lies `reach` edges from it.
@@ -27,13 +31,14 @@ pub fn fold_height(x: &[Vec3], triangles: &[[u32; 3]], ridge: &[u32], reach: u32
             ring[t[(k + 1) % 3] as usize].push(t[k]);
         }
     }
-    // Graph distance from the ridge, out to `reach`.
+    // Graph distance from the ridge, out to the reference rings.
     let mut dist = vec![u32::MAX; n];
     let mut front: Vec<u32> = ridge.to_vec();
+    let mut reference = Vec::new();
     for &v in ridge {
         dist[v as usize] = 0;
     }
-    for d in 1..=reach {
+    for d in 1..reach + RINGS {
         let mut next = Vec::new();
         for &v in &front {
             for &u in &ring[v as usize] {
@@ -43,9 +48,12 @@ pub fn fold_height(x: &[Vec3], triangles: &[[u32; 3]], ridge: &[u32], reach: u32
                 }
             }
         }
+        if d >= reach {
+            reference.extend_from_slice(&next);
+        }
         front = next;
     }
-    if front.is_empty() {
+    if reference.len() < 3 {
         return None;
     }
     let mut normals = Vec::new();
@@ -54,17 +62,15 @@ pub fn fold_height(x: &[Vec3], triangles: &[[u32; 3]], ridge: &[u32], reach: u32
         .iter()
         .filter_map(|&v| {
             let p = x[v as usize];
-            let mut near: Vec<(Real, u32)> = front
+            let mut near: Vec<(Real, u32)> = reference
                 .iter()
                 .map(|&u| ((x[u as usize] - p).norm_squared(), u))
                 .collect();
             near.sort_by(|a, b| a.0.total_cmp(&b.0));
             near.truncate(NEAREST);
-            let k = near.len() as Real;
-            let c = near.iter().map(|&(_, u)| x[u as usize]).sum::<Vec3>() / k;
+            let pts: Vec<Vec3> = near.iter().map(|&(_, u)| x[u as usize]).collect();
             let m = near.iter().map(|&(_, u)| normals[u as usize]).sum::<Vec3>();
-            let m = m.try_normalize(1e-12)?;
-            let h = (p - c).dot(&m);
+            let h = height_over(&pts, &m.try_normalize(1e-12)?, &p)?;
             h.is_finite().then_some(h)
         })
         .collect();
@@ -79,4 +85,41 @@ pub fn fold_height(x: &[Vec3], triangles: &[[u32; 3]], ridge: &[u32], reach: u32
 /// stayed a valley counts positive).
 pub fn fold_retention(height: Real, drawn: Real) -> Real {
     if drawn == 0.0 { 0.0 } else { height / drawn }
+}
+
+/// How far `p` lies above the quadratic height field fitted to `pts` over the plane with
+/// normal `n` through their centroid (above the plane itself where too few points or too
+/// degenerate a layout leave the quadric undetermined).
+fn height_over(pts: &[Vec3], n: &Vec3, p: &Vec3) -> Option<Real> {
+    let c = pts.iter().sum::<Vec3>() / pts.len() as Real;
+    let t1 = n
+        .cross(&Vec3::x())
+        .try_normalize(1e-6)
+        .or_else(|| n.cross(&Vec3::y()).try_normalize(1e-6))?;
+    let t2 = n.cross(&t1);
+    let local = |q: &Vec3| {
+        let d = q - c;
+        (d.dot(&t1), d.dot(&t2), d.dot(n))
+    };
+    let (pu, pv, pw) = local(p);
+    if pts.len() >= 8 {
+        let rows: Vec<Real> = pts
+            .iter()
+            .flat_map(|q| {
+                let (u, v, _) = local(q);
+                [1.0, u, v, u * u, u * v, v * v]
+            })
+            .collect();
+        let a = nalgebra::DMatrix::from_row_slice(pts.len(), 6, &rows);
+        let b = nalgebra::DVector::from_iterator(pts.len(), pts.iter().map(|q| local(q).2));
+        let svd = a.svd(true, true);
+        let s = &svd.singular_values;
+        let (hi, lo) = (s.max(), s.min());
+        if hi > 0.0 && lo > 1e-6 * hi {
+            let k = svd.solve(&b, 1e-12).ok()?;
+            let w = k[0] + k[1] * pu + k[2] * pv + k[3] * pu * pu + k[4] * pu * pv + k[5] * pv * pv;
+            return Some(pw - w);
+        }
+    }
+    Some(pw)
 }

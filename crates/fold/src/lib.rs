@@ -4,8 +4,8 @@
 //! 1. the line, snapped to the garment's surface and followed across it (`path`);
 //! 2. mass points added where it crosses the mesh's edges and the faces it crosses subdivided,
 //!    so the line becomes a chain of mesh edges (`split`; the mesh stays conforming and manifold),
-//!    the new points then moved along the normal, out for a ridge and in for a valley: a spiky
-//!    fold (`displace`);
+//!    the new points then moved along the normal, out for a ridge and in for a valley, easing to
+//!    nothing over each end's fifth of the line ([`taper`]): a spiky fold (`displace`);
 //! 3. local Laplacian smoothing of the new points and their neighbourhood, repeated as often as
 //!    asked, each round with or without Taubin's hierarchical constraint (new points see only new
 //!    points, so the ridge is smoothed along its length and not pulled back into the surface)
@@ -280,9 +280,33 @@ fn displace(out: &mut Folded, lines: &[FoldLine]) {
             FoldKind::Ridge => l.height,
             FoldKind::Valley => -l.height,
         };
-        for &v in &f.ridge {
-            let n = normals[v as usize];
-            out.mesh.positions[v as usize] += n * f.drawn;
+        // Arc length along the line, for the taper.
+        let x = &out.mesh.positions;
+        let mut along = vec![0.0];
+        for w in f.ridge.windows(2) {
+            let step = (x[w[1] as usize] - x[w[0] as usize]).norm();
+            along.push(along[along.len() - 1] + step);
+        }
+        let total = along[along.len() - 1].max(1e-12);
+        let moves: Vec<(usize, Vec3)> = (f.ridge.iter().zip(&along))
+            .map(|(&v, &s)| (v as usize, normals[v as usize] * f.drawn * taper(s / total)))
+            .collect();
+        for (v, d) in moves {
+            out.mesh.positions[v] += d;
         }
     }
 }
+
+/// Share of a fold's height at `s` (0..1 along its line): full over the middle, easing to 0 at
+/// the ends over a fifth of the line each (a fold dies out into the cloth; the ends, held still by
+/// constrained smoothing, would otherwise stand as spikes).
+pub fn taper(s: Real) -> Real {
+    let ramp = |t: Real| {
+        let t = (t / TAPER).clamp(0.0, 1.0);
+        t * t * (3.0 - 2.0 * t)
+    };
+    ramp(s) * ramp(1.0 - s)
+}
+
+/// The share of a line's length over which each end eases in.
+const TAPER: Real = 0.2;

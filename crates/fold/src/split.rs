@@ -60,6 +60,13 @@ pub(crate) fn split_along(mesh: &PolyMesh, w: &Walked) -> Folded {
         }
         folds.push(Fold { ridge, drawn: 0.0 });
     }
+    let ring = crate::ring_of(&PolyMesh {
+        positions: s.positions.clone(),
+        faces: s.faces.clone(),
+    });
+    for f in &mut folds {
+        f.ridge = joined(&f.ridge, &ring);
+    }
     let n = s.positions.len();
     let mut is_new = vec![false; n];
     is_new[n0..].iter_mut().for_each(|b| *b = true);
@@ -149,4 +156,56 @@ impl Splitter {
             self.incident[v as usize].extend([f, g]);
         }
     }
+}
+
+/// Most edges bridged between two ridge vertices that no edge joins.
+const BRIDGE: usize = 6;
+
+/// `ridge` with each pair of consecutive vertices that no edge joins (where a line starts again
+/// from a corner of the mesh, through another face than it arrived in) bridged by the shortest
+/// path of edges between them, when one of at most [`BRIDGE`] edges exists.
+fn joined(ridge: &[u32], ring: &[Vec<u32>]) -> Vec<u32> {
+    let mut out: Vec<u32> = Vec::with_capacity(ridge.len());
+    for &v in ridge {
+        if let Some(&u) = out.last()
+            && !ring[u as usize].contains(&v)
+            && let Some(path) = shortest(u, v, ring)
+        {
+            out.extend_from_slice(&path[1..path.len() - 1]);
+        }
+        if !out.contains(&v) {
+            out.push(v);
+        }
+    }
+    out
+}
+
+/// The vertices of a shortest path of edges from `a` to `b` (both included), if at most
+/// [`BRIDGE`] edges long.
+fn shortest(a: u32, b: u32, ring: &[Vec<u32>]) -> Option<Vec<u32>> {
+    let mut from: HashMap<u32, u32> = HashMap::from([(a, a)]);
+    let mut front = vec![a];
+    for _ in 0..BRIDGE {
+        let mut next = Vec::new();
+        for &v in &front {
+            for &u in &ring[v as usize] {
+                if from.contains_key(&u) {
+                    continue;
+                }
+                from.insert(u, v);
+                if u == b {
+                    let (mut path, mut at) = (vec![b], b);
+                    while at != a {
+                        at = from[&at];
+                        path.push(at);
+                    }
+                    path.reverse();
+                    return Some(path);
+                }
+                next.push(u);
+            }
+        }
+        front = next;
+    }
+    None
 }

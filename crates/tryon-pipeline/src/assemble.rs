@@ -26,6 +26,8 @@ impl Pipeline {
         // The garments, each placed clear of the body (judged with the cloth's thickness) and
         // of the layers under it, joined into one cloth.
         let dressed = crate::wardrobe::dress(&scene, &body, collides)?;
+        // Folds drawn on the garment (P3): the mesh subdivided and shaped before the cloth is built.
+        let (dressed, folds) = crate::folding::apply(&scene, dressed)?;
         let (garment, placed_moved) = (dressed.mesh.clone(), dressed.placed_moved);
         let attachments = dressed.attachments.clone();
         // The referee judges the true surface.
@@ -45,7 +47,14 @@ impl Pipeline {
                 .collect()
         });
         let kinematic: Vec<u32> = attachments.iter().map(|a| a.vertex).collect();
-        let solver = build::solver(&scene, &garment, handles, &kinematic, &dressed.wear)?;
+        let solver = build::solver(
+            &scene,
+            &garment,
+            handles,
+            &kinematic,
+            &dressed.wear,
+            &folds.bends,
+        )?;
         let collider = collides
             .then(|| build::collider(fx.body_collision, &body.mesh, thickness, &fx))
             .transpose()?;
@@ -109,6 +118,7 @@ impl Pipeline {
             fps,
             grab,
             end_shape: Vec::new(),
+            folds,
         })
     }
 }

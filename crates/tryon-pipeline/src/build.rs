@@ -53,6 +53,10 @@ pub enum AssembleError {
     Detail(#[from] wrinkle::DetailError),
     #[error("garments: {0}")]
     Wear(#[from] cloth_dyn::wear::WearError),
+    #[error("[[fold]] {0}")]
+    Fold(#[from] fold::FoldError),
+    #[error("[[fold]]: folds are drawn on a scene with one garment; this one wears {0}")]
+    FoldGarments(usize),
 }
 
 /// The body as assembled: its rest mesh, the model, the motion (`None` for a body that holds
@@ -316,12 +320,14 @@ pub fn solver(
     handles: Vec<Handle>,
     kinematic: &[u32],
     wear: &[GarmentWear],
+    bends: &[cloth_dyn::bends::BendChange],
 ) -> Result<Box<dyn ClothSolver>, AssembleError> {
     let model = |p: &ClothParams| -> Result<ClothModel, AssembleError> {
         let mut m = ClothModel::build_with_kinematic(garment, p, handles.clone(), kinematic)?;
         if !wear.is_empty() {
             m.wear(wear)?;
         }
+        m.change_bends(bends);
         Ok(m)
     };
     Ok(match scene.cloth.solver {

@@ -12,6 +12,7 @@ pub mod build;
 pub mod crossings;
 pub mod drape;
 pub mod export;
+pub mod folding;
 pub mod hold;
 pub mod metrics;
 pub mod pipeline;

@@ -70,6 +70,8 @@ pub struct Pipeline {
     pub grab: Option<Grab>,
     /// Scratch: the body's shape at the end of the frame being stepped.
     pub end_shape: Vec<Vec3>,
+    /// The folds drawn on the garment (`[[fold]]`), to measure after the run.
+    pub folds: crate::folding::Folds,
 }
 
 impl std::fmt::Debug for Pipeline {

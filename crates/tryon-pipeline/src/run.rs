@@ -40,7 +40,7 @@ pub struct Counts {
 }
 
 /// Accuracy and robustness over the run, judged by the exact referee.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct Metrics {
     /// Deepest garment vertex inside the body over all frames (m).
     pub max_penetration_m: Real,
@@ -96,6 +96,14 @@ pub struct Metrics {
     /// touched in the starting shape did before the first step.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub untangle: Option<UntangleStats>,
+    /// Per `[[fold]]`, its height over the surrounding cloth at the last frame over its drawn
+    /// height (P3's open problem: how far simulation drifts from the drawn shape); null where
+    /// a fold could not be measured. Absent without folds.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub fold_retention: Vec<Option<Real>>,
+    /// The same before the simulation, as shaped (smoothing alone lowers a fold).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub fold_retention_shaped: Vec<Option<Real>>,
 }
 
 /// What untangling the starting shape did (`tryon_core::stages::Untangled`).
@@ -436,6 +444,20 @@ impl Pipeline {
             moved: u.moved,
             farthest_m: u.farthest,
         });
+        if !self.folds.folds.is_empty() {
+            let (tris, _) = self.garment.triangulate();
+            let finite = |r: Real| r.is_finite().then_some(r);
+            let m = &mut stats.metrics;
+            m.fold_retention = (self
+                .folds
+                .retention(&self.cloth.positions, &tris)
+                .into_iter())
+            .map(finite)
+            .collect();
+            m.fold_retention_shaped = (self.folds.shaped.iter().zip(&self.folds.folds))
+                .map(|(h, f)| h.map(|h| fold::fold_retention(h, f.drawn)))
+                .collect();
+        }
         stats.stages = timers.finish();
         RunSummary {
             garment_triangles,

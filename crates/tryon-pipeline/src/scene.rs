@@ -8,10 +8,12 @@ use thiserror::Error;
 
 mod check;
 pub mod docs;
+mod folds;
 mod read;
 mod schema;
 mod sections;
 
+pub use folds::{FoldShape, FoldSpec, FoldingSection, SmoothName};
 pub use schema::{
     ArmRaiseSpec, BodySection, BvhSpec, DressSpec, GarmentSection, IntegratorName, MakeHumanSpec,
     MannequinBody, MaterialName, MhcloSpec, MotionSection, ObjectBody, RigName, SceneSection,
@@ -73,6 +75,12 @@ pub struct Scene {
     pub effects: EffectsSection,
     /// What to write.
     pub output: OutputSection,
+    /// How the folds are shaped and held.
+    pub folding: FoldingSection,
+    /// Folds drawn on the garment (`[[fold]]`, P3), in order.
+    #[serde(skip)]
+    #[schemars(skip)]
+    pub fold: Vec<FoldSpec>,
     /// The file the scene was read from (asset paths are resolved beside it).
     #[serde(skip)]
     #[schemars(skip)]

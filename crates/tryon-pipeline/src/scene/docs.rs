@@ -191,9 +191,13 @@ pub fn keys() -> Vec<Key> {
     let defs = &r["$defs"];
     let mut out = Vec::new();
     for table in [
-        "scene", "body", "garment", "motion", "cloth", "effects", "output",
+        "scene", "body", "garment", "motion", "cloth", "effects", "output", "folding",
     ] {
         let t = resolve(&r["properties"][table], defs);
+        if table == "folding" {
+            let w = schemars::schema_for!(super::FoldSpec).as_value().clone();
+            out.extend(keys_of("fold", None, &w, &w["$defs"]));
+        }
         if table == "garment" {
             let w = schemars::schema_for!(super::WearSpec).as_value().clone();
             out.extend(keys_of(table, None, &w, &w["$defs"]));
@@ -215,6 +219,10 @@ pub fn keys() -> Vec<Key> {
 
 /// The description of a table, or of one kind of it.
 fn describe(table: &str, kind: Option<&str>) -> String {
+    if table == "fold" {
+        let f = schemars::schema_for!(super::FoldSpec).as_value().clone();
+        return f["description"].as_str().unwrap_or("").replace('\n', " ");
+    }
     let r = root();
     let defs = &r["$defs"];
     let t = resolve(&r["properties"][table], defs);
@@ -245,9 +253,13 @@ pub fn markdown() -> String {
         let here = (k.table.clone(), k.kind.clone());
         if last.as_ref() != Some(&here) {
             if last.as_ref().is_none_or(|l| l.0 != k.table) {
+                // Tables given as arrays (`[[fold]]`) are headed as such.
+                let header = match k.table.as_str() {
+                    "fold" => "[[fold]]".to_string(),
+                    t => format!("[{t}]"),
+                };
                 s.push_str(&format!(
-                    "\n## [{}]\n\n{}\n",
-                    k.table,
+                    "\n## {header}\n\n{}\n",
                     describe(&k.table, None)
                 ));
             }

@@ -10,8 +10,8 @@ use toml::Spanned;
 use toml::de::{DeString, DeTable, DeValue, Deserializer};
 
 /// The tables a scene may have.
-const TABLES: [&str; 7] = [
-    "scene", "body", "garment", "motion", "cloth", "effects", "output",
+const TABLES: [&str; 9] = [
+    "scene", "body", "garment", "motion", "cloth", "effects", "output", "folding", "fold",
 ];
 
 /// A deserialization error at its place in `text`, with the key named when the message does not.
@@ -213,6 +213,8 @@ pub(super) fn scene(text: &str, file: &Path) -> Result<Scene, SceneError> {
         cloth: Default::default(),
         effects: Default::default(),
         output: Default::default(),
+        folding: Default::default(),
+        fold: Vec::new(),
         source: None,
     };
     let (mut body, mut garment) = (false, false);
@@ -234,6 +236,17 @@ pub(super) fn scene(text: &str, file: &Path) -> Result<Scene, SceneError> {
             "cloth" => s.cloth = plain(text, file, "cloth", value)?,
             "effects" => s.effects = plain(text, file, "effects", value)?,
             "output" => s.output = plain(text, file, "output", value)?,
+            "folding" => s.folding = plain(text, file, "folding", value)?,
+            "fold" => {
+                let span = value.span();
+                s.fold = match value.into_inner() {
+                    DeValue::Array(items) => items
+                        .into_iter()
+                        .map(|v| plain(text, file, "fold", v))
+                        .collect::<Result<_, _>>()?,
+                    other => vec![plain(text, file, "fold", Spanned::new(span, other))?],
+                };
+            }
             other => {
                 let tables = TABLES.map(|t| format!("[{t}]")).join(", ");
                 return Err(invalid(

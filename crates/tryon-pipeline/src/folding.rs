@@ -1,0 +1,82 @@
+//! The scene's `[[fold]]` lines made into folds on the dressed garment (P3, the `fold` stage)
+//! before the cloth is built: the mesh subdivided along them and shaped, and the bend springs
+//! across each line changed once the solver's model exists. Their height is measured again
+//! after the run: stats.json's `fold_retention`.
+
+use crate::build::AssembleError;
+use crate::scene::Scene;
+use crate::wardrobe::Dressed;
+use cloth_dyn::bends::BendChange;
+use tryon_core::math::{Real, Vec3};
+
+/// The folds made, as the run measures them.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Folds {
+    pub folds: Vec<fold::Fold>,
+    /// Edges from a line at which the surrounding surface is taken (`fold::fold_height`).
+    pub reach: u32,
+    /// The bend springs to change.
+    pub bends: Vec<BendChange>,
+    /// Each fold's height as shaped, before the simulation (m; `None` when not measurable).
+    pub shaped: Vec<Option<Real>>,
+}
+
+impl Folds {
+    /// Each fold's height in `x` (the garment's vertices) over its drawn height; NaN where
+    /// the fold cannot be measured.
+    pub fn retention(&self, x: &[Vec3], triangles: &[[u32; 3]]) -> Vec<Real> {
+        self.folds
+            .iter()
+            .map(|f| {
+                fold::fold_height(x, triangles, &f.ridge, self.reach)
+                    .map_or(Real::NAN, |h| fold::fold_retention(h, f.drawn))
+            })
+            .collect()
+    }
+}
+
+/// `dressed` with the scene's folds made; unchanged, with no folds, when it has none.
+pub(crate) fn apply(
+    scene: &Scene,
+    mut dressed: Dressed,
+) -> Result<(Dressed, Folds), AssembleError> {
+    if scene.fold.is_empty() {
+        return Ok((dressed, Folds::default()));
+    }
+    if dressed.wear.len() > 1 {
+        return Err(AssembleError::FoldGarments(dressed.wear.len()));
+    }
+    let p = scene.folding.params();
+    let lines: Vec<fold::FoldLine> = scene.fold.iter().map(|f| f.line()).collect();
+    let folded = fold::build(&dressed.mesh, &lines, &p)?;
+    let bends = fold::bend_edits(&folded, &p)
+        .into_iter()
+        .map(|e| BendChange {
+            a: e.a,
+            b: e.b,
+            rest_scale: e.rest_scale,
+            stiffness_scale: e.stiffness_scale,
+        })
+        .collect();
+    let reach = p.rings + 2;
+    let (tris, _) = folded.mesh.triangulate();
+    let shaped = folded
+        .folds
+        .iter()
+        .map(|f| fold::fold_height(&folded.mesh.positions, &tris, &f.ridge, reach))
+        .collect();
+    let n = folded.mesh.positions.len() as u32;
+    if let Some(w) = dressed.wear.first_mut() {
+        w.particles.end = n;
+    }
+    dressed.mesh = folded.mesh;
+    Ok((
+        dressed,
+        Folds {
+            folds: folded.folds,
+            reach,
+            bends,
+            shaped,
+        },
+    ))
+}

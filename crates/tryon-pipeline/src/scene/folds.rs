@@ -1,0 +1,125 @@
+//! The scene's folds (P3): each `[[fold]]` a line drawn on the garment, and `[folding]` how the
+//! folds are shaped (smoothing rounds) and held (the bend springs across each line).
+
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+use tryon_core::math::Real;
+
+/// One fold drawn on the garment (`[[fold]]`, as many as wanted): a line of points on the
+/// garment as it is placed on the body at the start (world coordinates, m), each snapped to the
+/// nearest surface point within `[folding] snap`.
+#[derive(Clone, Debug, Deserialize, Serialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FoldSpec {
+    /// A ridge stands out of the garment (along its outward normal), a valley sinks in.
+    #[serde(default)]
+    pub shape: FoldShape,
+    /// The line's points in order, at least two.
+    pub points: Vec<[Real; 3]>,
+    /// How far the ridge stands out, or the valley sinks in (m).
+    #[schemars(range(min = 0.001, max = 1.0))]
+    pub height: Real,
+}
+
+/// Which way a fold stands.
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, JsonSchema, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum FoldShape {
+    #[default]
+    Ridge,
+    Valley,
+}
+
+/// One smoothing round's kind.
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, JsonSchema, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum SmoothName {
+    /// Every vertex sees all its neighbours: the ridge sinks and widens.
+    Plain,
+    /// Taubin's hierarchical constraint: the line's vertices see only each other, so the ridge
+    /// is smoothed along its length and keeps its height.
+    Constrained,
+}
+
+/// How the `[[fold]]` lines are shaped and held (P3 3.4-3.5).
+#[derive(Clone, Debug, Deserialize, Serialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct FoldingSection {
+    /// The smoothing rounds after the spiky fold is made, in order.
+    pub rounds: Vec<SmoothName>,
+    /// Each round moves a vertex this fraction of the way to its neighbours' mean.
+    #[schemars(range(min = 0.01, max = 1.0))]
+    pub lambda: Real,
+    /// Rings of vertices around a line that smoothing moves.
+    #[schemars(range(min = 0, max = 20))]
+    pub rings: u32,
+    /// Farthest a line's point may be from the garment (m).
+    #[schemars(range(min = 0.0, max = 1.0))]
+    pub snap: Real,
+    /// Rest length of the bend springs crossing a line, as a share of their folded length.
+    #[schemars(range(min = 0.1, max = 1.0))]
+    pub bend_shorten: Real,
+    /// Stiffness of the bend springs crossing a line, as a multiple of the others'.
+    #[schemars(range(min = 1.0, max = 1000.0))]
+    pub bend_stiffen: Real,
+}
+
+impl Default for FoldingSection {
+    fn default() -> Self {
+        let p = fold::FoldParams::default();
+        FoldingSection {
+            rounds: p
+                .rounds
+                .iter()
+                .map(|r| match r {
+                    fold::Round::Plain => SmoothName::Plain,
+                    fold::Round::Constrained => SmoothName::Constrained,
+                })
+                .collect(),
+            lambda: p.lambda,
+            rings: p.rings,
+            snap: p.snap,
+            bend_shorten: p.bend_shorten,
+            bend_stiffen: p.bend_stiffen,
+        }
+    }
+}
+
+impl FoldingSection {
+    /// The fold stage's parameters.
+    pub fn params(&self) -> fold::FoldParams {
+        fold::FoldParams {
+            rounds: self
+                .rounds
+                .iter()
+                .map(|r| match r {
+                    SmoothName::Plain => fold::Round::Plain,
+                    SmoothName::Constrained => fold::Round::Constrained,
+                })
+                .collect(),
+            lambda: self.lambda,
+            rings: self.rings,
+            snap: self.snap,
+            bend_shorten: self.bend_shorten,
+            bend_stiffen: self.bend_stiffen,
+        }
+    }
+}
+
+impl FoldSpec {
+    /// The fold stage's line.
+    pub fn line(&self) -> fold::FoldLine {
+        fold::FoldLine {
+            kind: match self.shape {
+                FoldShape::Ridge => fold::FoldKind::Ridge,
+                FoldShape::Valley => fold::FoldKind::Valley,
+            },
+            points: self
+                .points
+                .iter()
+                .map(|p| tryon_core::math::Vec3::new(p[0], p[1], p[2]))
+                .collect(),
+            height: self.height,
+        }
+    }
+}
