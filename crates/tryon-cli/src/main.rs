@@ -162,6 +162,19 @@ fn run(mut p: Pipeline, out: &Path, frames: Option<usize>, quiet: bool) -> Resul
                 r.arm_frames_moved, r.max_arm_turn_deg
             );
         }
+        if !m.fold_retention.is_empty() {
+            let list = |v: &[Option<f64>]| {
+                v.iter()
+                    .map(|r| r.map_or("?".into(), |r| format!("{r:.2}")))
+                    .collect::<Vec<String>>()
+                    .join(", ")
+            };
+            println!(
+                "folds: height over the drawn height {} at the end ({} as shaped)",
+                list(&m.fold_retention),
+                list(&m.fold_retention_shaped)
+            );
+        }
         if m.detached_share > 0.0 {
             let worst = s
                 .per_frame

@@ -258,10 +258,7 @@ pub fn markdown() -> String {
                     "fold" => "[[fold]]".to_string(),
                     t => format!("[{t}]"),
                 };
-                s.push_str(&format!(
-                    "\n## {header}\n\n{}\n",
-                    describe(&k.table, None)
-                ));
+                s.push_str(&format!("\n## {header}\n\n{}\n", describe(&k.table, None)));
             }
             if let Some(kind) = &k.kind {
                 let d = describe(&k.table, Some(kind));
