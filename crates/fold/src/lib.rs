@@ -171,7 +171,7 @@ pub fn subdivide(mesh: &PolyMesh, lines: &[FoldLine], p: &FoldParams) -> Result<
     }
     Topology::build(mesh)?;
     let crossings = path::walk_all(mesh, lines, p.snap)?;
-    let mut out = split::split_along(mesh, &crossings);
+    let mut out = split::split_along(mesh, &crossings)?;
     displace(&mut out, lines);
     out.region = smooth::region(&out, p.rings);
     Ok(out)
@@ -197,26 +197,33 @@ pub fn build(mesh: &PolyMesh, lines: &[FoldLine], p: &FoldParams) -> Result<Fold
 /// The bend springs crossing each fold's line (those spanning an edge of its ridge), with
 /// `p`'s changes.
 pub fn bend_edits(folded: &Folded, p: &FoldParams) -> Vec<BendEdit> {
+    let key = |u: u32, v: u32| (u.min(v), u.max(v));
+    // The vertices opposite each ridge edge, from one pass over the triangles.
+    let mut opposite: std::collections::HashMap<(u32, u32), Vec<u32>> = folded
+        .folds
+        .iter()
+        .flat_map(|f| f.ridge.windows(2).map(|w| (key(w[0], w[1]), Vec::new())))
+        .collect();
     let (tris, _) = folded.mesh.triangulate();
-    let mut out = Vec::new();
-    for f in &folded.folds {
-        for w in f.ridge.windows(2) {
-            let (u, v) = (w[0], w[1]);
-            let opposite: Vec<u32> = tris
-                .iter()
-                .filter(|t| t.contains(&u) && t.contains(&v))
-                .filter_map(|t| t.iter().copied().find(|&x| x != u && x != v))
-                .collect();
-            if let [a, b] = opposite[..] {
-                out.push(BendEdit {
-                    a: a.min(b),
-                    b: a.max(b),
-                    rest_scale: p.bend_shorten,
-                    stiffness_scale: p.bend_stiffen,
-                });
+    for t in &tris {
+        for k in 0..3 {
+            if let Some(o) = opposite.get_mut(&key(t[k], t[(k + 1) % 3])) {
+                o.push(t[(k + 2) % 3]);
             }
         }
     }
+    let mut out: Vec<BendEdit> = opposite
+        .values()
+        .filter_map(|o| match o[..] {
+            [a, b] if a != b => Some(BendEdit {
+                a: a.min(b),
+                b: a.max(b),
+                rest_scale: p.bend_shorten,
+                stiffness_scale: p.bend_stiffen,
+            }),
+            _ => None,
+        })
+        .collect();
     out.sort_by_key(|e| (e.a, e.b));
     out.dedup_by_key(|e| (e.a, e.b));
     out

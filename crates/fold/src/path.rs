@@ -13,6 +13,8 @@ pub(crate) struct Crossing {
     pub a: u32,
     pub b: u32,
     pub t: Real,
+    /// The line's segment (from its point `segment` to the next) that crosses here.
+    pub segment: usize,
 }
 
 /// The crossings of every line, in order along each, and the source faces each line passes
@@ -42,6 +44,7 @@ pub(crate) fn walk_all(
                 .push(k as u32);
         }
     }
+    let spheres = spheres(x, &tris);
     let mut around = vec![Vec::new(); x.len()];
     for (k, t) in tris.iter().enumerate() {
         for &v in t {
@@ -60,12 +63,12 @@ pub(crate) fn walk_all(
             .points
             .iter()
             .enumerate()
-            .map(|(i, p)| snap_point(x, &tris, p, snap).ok_or(i))
+            .map(|(i, p)| snap_point(x, &tris, &spheres, p, snap).ok_or(i))
             .collect::<Result<_, usize>>()
             .map_err(|point| FoldError::OffGarment {
                 fold: f,
                 point,
-                distance: nearest_distance(x, &tris, &l.points[point]),
+                distance: nearest_distance(x, &tris, &spheres, &l.points[point]),
                 allowed: snap,
             })?;
         let mut w = Walker {
@@ -76,8 +79,10 @@ pub(crate) fn walk_all(
             crossings: Vec::new(),
             visited: vec![snapped[0].0],
             cur: snapped[0].0,
+            index: 0,
         };
         for (s, pair) in snapped.windows(2).enumerate() {
+            w.index = s;
             w.segment(pair[0].1, pair[1])
                 .map_err(|e| e.into_error(f, s))?;
         }
@@ -104,33 +109,54 @@ pub(crate) fn walk_all(
     Ok(out)
 }
 
-/// The triangle nearest `p` and the nearest point on it, if within `snap`.
-fn snap_point(x: &[Vec3], tris: &[[u32; 3]], p: &Vec3, snap: Real) -> Option<(u32, Vec3)> {
-    let mut best: Option<(Real, u32, Vec3)> = None;
-    for (k, t) in tris.iter().enumerate() {
-        let [a, b, c] = t.map(|v| x[v as usize]);
-        // A cheap bound first: the distance to the triangle's bounding sphere.
-        let centre = (a + b + c) / 3.0;
-        let r = (a - centre)
-            .norm()
-            .max((b - centre).norm())
-            .max((c - centre).norm());
-        let lower = ((p - centre).norm() - r).max(0.0);
-        if best.is_some_and(|(d, _, _)| lower * lower >= d) {
-            continue;
-        }
-        let (q, _) = closest_point_on_triangle(p, &a, &b, &c);
-        let d = (q - p).norm_squared();
-        if best.is_none_or(|(bd, _, _)| d < bd) {
-            best = Some((d, k as u32, q));
-        }
-    }
-    best.filter(|(d, _, _)| d.sqrt() <= snap)
-        .map(|(_, k, q)| (k, q))
+/// Each triangle's bounding sphere (centre, radius), for the nearest-triangle search.
+fn spheres(x: &[Vec3], tris: &[[u32; 3]]) -> Vec<(Vec3, Real)> {
+    tris.iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|v| x[v as usize]);
+            let centre = (a + b + c) / 3.0;
+            let r = (a - centre)
+                .norm()
+                .max((b - centre).norm())
+                .max((c - centre).norm());
+            (centre, r)
+        })
+        .collect()
 }
 
-fn nearest_distance(x: &[Vec3], tris: &[[u32; 3]], p: &Vec3) -> Real {
-    snap_point(x, tris, p, Real::INFINITY).map_or(Real::INFINITY, |(_, q)| (q - p).norm())
+/// The triangle nearest `p` and the nearest point on it, if within `snap`: started from the
+/// triangle whose bounding sphere is nearest, then every triangle whose sphere could hold a
+/// nearer point.
+fn snap_point(
+    x: &[Vec3],
+    tris: &[[u32; 3]],
+    spheres: &[(Vec3, Real)],
+    p: &Vec3,
+    snap: Real,
+) -> Option<(u32, Vec3)> {
+    let lower = |k: usize| ((p - spheres[k].0).norm() - spheres[k].1).max(0.0);
+    let exact = |k: usize| {
+        let [a, b, c] = tris[k].map(|v| x[v as usize]);
+        let (q, _) = closest_point_on_triangle(p, &a, &b, &c);
+        ((q - p).norm_squared(), k as u32, q)
+    };
+    let first = (0..tris.len()).min_by(|&i, &j| lower(i).total_cmp(&lower(j)))?;
+    let mut best = exact(first);
+    for k in 0..tris.len() {
+        let l = lower(k);
+        if l * l >= best.0 {
+            continue;
+        }
+        let e = exact(k);
+        if e.0 < best.0 {
+            best = e;
+        }
+    }
+    (best.0.sqrt() <= snap).then_some((best.1, best.2))
+}
+
+fn nearest_distance(x: &[Vec3], tris: &[[u32; 3]], s: &[(Vec3, Real)], p: &Vec3) -> Real {
+    snap_point(x, tris, s, p, Real::INFINITY).map_or(Real::INFINITY, |(_, q)| (q - p).norm())
 }
 
 /// Why a segment could not be followed (made a [`FoldError`] with the fold and segment).
@@ -160,6 +186,8 @@ struct Walker<'a> {
     visited: Vec<u32>,
     /// The triangle the walk is in.
     cur: u32,
+    /// The segment being followed.
+    index: usize,
 }
 
 impl Walker<'_> {
@@ -195,16 +223,19 @@ impl Walker<'_> {
         next
     }
 
+    /// Whether `p` lies on triangle `t` (within rounding).
+    fn touches(&self, t: u32, p: Vec3) -> bool {
+        let [a, b, c] = self.tris[t as usize].map(|v| self.x[v as usize]);
+        let (q, _) = closest_point_on_triangle(&p, &a, &b, &c);
+        (q - p).norm() <= 1e-9 * (1.0 + (b - a).norm())
+    }
+
     /// The triangles sharing a corner with `t` that `p` lies on (within rounding).
     fn faces_at(&self, t: u32, p: Vec3) -> Vec<u32> {
         let mut out: Vec<u32> = self.tris[t as usize]
             .iter()
             .flat_map(|&v| self.around[v as usize].iter().copied())
-            .filter(|&k| {
-                let [a, b, c] = self.tris[k as usize].map(|v| self.x[v as usize]);
-                let (q, _) = closest_point_on_triangle(&p, &a, &b, &c);
-                (q - p).norm() <= 1e-9 * (1.0 + (b - a).norm())
-            })
+            .filter(|&k| self.touches(k, p))
             .collect();
         out.sort_unstable();
         out.dedup();
@@ -232,7 +263,8 @@ impl Walker<'_> {
         let (mut cur, mut entry) = (ta, None::<(u32, u32)>);
         let before = self.crossings.len();
         for _ in 0..=self.tris.len() {
-            if cur == tb {
+            // Arrived: in the end point's triangle, or one it lies on the edge or corner of.
+            if cur == tb || self.touches(cur, pb) {
                 break;
             }
             let mut next = self.exit(cur, entry, &side, pa, d);
@@ -271,6 +303,7 @@ impl Walker<'_> {
                 a: edge.0,
                 b: edge.1,
                 t: s.clamp(0.0, 1.0),
+                segment: self.index,
             });
             self.visited.push(to);
             entry = Some(edge);

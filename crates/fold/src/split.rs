@@ -5,7 +5,7 @@
 //! second lies on an edge of a triangle the first split made, which has the first as a corner.
 
 use crate::path::{Crossing, Walked};
-use crate::{Fold, Folded};
+use crate::{Fold, FoldError, Folded};
 use std::collections::{HashMap, HashSet};
 use tryon_core::math::Real;
 use tryon_core::mesh::{Face, PolyMesh};
@@ -17,7 +17,7 @@ const SAME: Real = 1e-9;
 /// them.
 const AT_END: Real = 0.15;
 
-pub(crate) fn split_along(mesh: &PolyMesh, w: &Walked) -> Folded {
+pub(crate) fn split_along(mesh: &PolyMesh, w: &Walked) -> Result<Folded, FoldError> {
     let crossed: HashSet<u32> = w
         .visited
         .iter()
@@ -50,13 +50,19 @@ pub(crate) fn split_along(mesh: &PolyMesh, w: &Walked) -> Folded {
     }
     let n0 = mesh.positions.len();
     let mut folds = Vec::new();
-    for line in &w.lines {
+    for (fold, line) in w.lines.iter().enumerate() {
         let mut ridge: Vec<u32> = Vec::new();
         for c in line {
             let v = s.split(c);
-            if ridge.last() != Some(&v) {
-                ridge.push(v);
+            if ridge.last() == Some(&v) {
+                continue;
             }
+            if ridge.contains(&v) {
+                // Back at a vertex the line took before: it runs back along itself.
+                let segment = c.segment;
+                return Err(FoldError::SelfCrossing { fold, segment });
+            }
+            ridge.push(v);
         }
         folds.push(Fold { ridge, drawn: 0.0 });
     }
@@ -75,7 +81,7 @@ pub(crate) fn split_along(mesh: &PolyMesh, w: &Walked) -> Folded {
             is_new[v as usize] = true;
         }
     }
-    Folded {
+    Ok(Folded {
         mesh: PolyMesh {
             positions: s.positions,
             faces: s.faces,
@@ -83,7 +89,7 @@ pub(crate) fn split_along(mesh: &PolyMesh, w: &Walked) -> Folded {
         folds,
         is_new,
         region: vec![false; n],
-    }
+    })
 }
 
 struct Splitter {
@@ -171,7 +177,11 @@ fn joined(ridge: &[u32], ring: &[Vec<u32>]) -> Vec<u32> {
             && !ring[u as usize].contains(&v)
             && let Some(path) = shortest(u, v, ring)
         {
-            out.extend_from_slice(&path[1..path.len() - 1]);
+            for &w in &path[1..path.len() - 1] {
+                if !out.contains(&w) {
+                    out.push(w);
+                }
+            }
         }
         if !out.contains(&v) {
             out.push(v);

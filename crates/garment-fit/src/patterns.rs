@@ -172,8 +172,8 @@ pub fn dress(m: &Measurements, p: &DressParams) -> Result<Garment, PatternError>
     }
     check("flare", p.flare, 0.0, 2.0)?;
     check("hem_above_knee", p.hem_above_knee, -0.3, 0.3)?;
-    check("columns", p.columns as Real, 16.0, 96.0)?;
-    check("row_spacing", p.row_spacing, 0.01, 0.2)?;
+    check("columns", p.columns as Real, 16.0, 192.0)?;
+    check("row_spacing", p.row_spacing, 0.005, 0.2)?;
     let cols = p.columns / 4 * 4;
     let lm = m.landmarks();
     let sc = m.scale();
@@ -430,8 +430,8 @@ pub fn skirt(m: &Measurements, p: &SkirtParams) -> Result<Garment, PatternError>
     check("ease.hip", p.ease[1], 0.0, 0.5)?;
     check("flare", p.flare, 0.0, 2.0)?;
     check("hem_above_knee", p.hem_above_knee, -0.3, 0.3)?;
-    check("columns", p.columns as Real, 16.0, 96.0)?;
-    check("row_spacing", p.row_spacing, 0.01, 0.2)?;
+    check("columns", p.columns as Real, 16.0, 192.0)?;
+    check("row_spacing", p.row_spacing, 0.005, 0.2)?;
     let lm = m.landmarks();
     let top = lm.waist + 0.02 * m.scale();
     let hem = lm.knee + p.hem_above_knee;

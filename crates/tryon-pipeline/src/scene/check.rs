@@ -81,9 +81,9 @@ fn within_ranges(
     Ok(())
 }
 
-/// Every key but the garments' wear keys (read per garment).
+/// Every key but the garments' wear keys (read per garment) and the folds' (read per fold).
 fn true_key(k: &docs::Key) -> bool {
-    !(k.table == "garment" && k.kind.is_none())
+    !(k.table == "garment" && k.kind.is_none()) && k.table != "fold"
 }
 
 /// Whether `x` lies in the key's range.
@@ -118,6 +118,12 @@ impl Scene {
             t.insert("garment".into(), toml::Value::try_from(g).map_err(syntax)?);
             let garment = |k: &docs::Key| k.table == "garment" && k.kind.is_some();
             within_ranges(&keys, &toml::Value::Table(t), garment, (text, file, n + 1))?;
+        }
+        for (n, f) in self.fold.iter().enumerate() {
+            let mut t = toml::Table::new();
+            t.insert("fold".into(), toml::Value::try_from(f).map_err(syntax)?);
+            let fold = |k: &docs::Key| k.table == "fold";
+            within_ranges(&keys, &toml::Value::Table(t), fold, (text, file, n))?;
         }
         for (n, w) in self.wear.iter().enumerate() {
             let mut t = toml::Table::new();

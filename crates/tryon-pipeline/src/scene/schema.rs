@@ -279,10 +279,10 @@ pub struct DressSpec {
     #[schemars(range(min = -0.3, max = 0.3))]
     pub hem_above_knee: Real,
     /// Samples around a ring.
-    #[schemars(range(min = 16, max = 96))]
+    #[schemars(range(min = 16, max = 192))]
     pub columns: usize,
     /// Spacing of rings (m).
-    #[schemars(range(min = 0.01, max = 0.2))]
+    #[schemars(range(min = 0.005, max = 0.2))]
     pub row_spacing: Real,
     /// Elastic bands (m): border loops lying within this distance of the body grip it; 0 = none.
     #[schemars(range(min = 0.0, max = 0.05))]
@@ -317,10 +317,10 @@ pub struct SkirtSpec {
     #[schemars(range(min = -0.3, max = 0.3))]
     pub hem_above_knee: Real,
     /// Samples around a ring.
-    #[schemars(range(min = 16, max = 96))]
+    #[schemars(range(min = 16, max = 192))]
     pub columns: usize,
     /// Spacing of rings (m).
-    #[schemars(range(min = 0.01, max = 0.2))]
+    #[schemars(range(min = 0.005, max = 0.2))]
     pub row_spacing: Real,
     /// Elastic bands (m): border loops lying within this distance of the body grip it; 0 = none.
     #[schemars(range(min = 0.0, max = 0.05))]

@@ -45,13 +45,26 @@ fn minimal(table: &str, kind: Option<&str>, extra: &str) -> String {
         ("cloth", String::new()),
         ("effects", String::new()),
         ("output", String::new()),
+        ("folding", String::new()),
     ];
     for (name, text) in &mut tables {
         if *name == table {
             text.push_str(extra);
         }
     }
-    tables.iter().map(|(n, t)| format!("[{n}]\n{t}")).collect()
+    let mut out: String = tables.iter().map(|(n, t)| format!("[{n}]\n{t}")).collect();
+    if table == "fold" {
+        // A fold needs its line; the dress's front at the waist.
+        out.push_str(&format!(
+            "[[fold]]\npoints = [[0.0, 1.0, 0.1], [0.0, 0.9, 0.1]]\n{}",
+            if extra.contains("height") {
+                extra.to_string()
+            } else {
+                format!("height = 0.02\n{extra}")
+            }
+        ));
+    }
+    out
 }
 
 #[test]
