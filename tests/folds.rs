@@ -2,7 +2,6 @@
 //! and reports a retention per fold; a folded cloth's mass per unit area stays uniform and only
 //! the bend springs across a line change; bad lines are errors naming the fold.
 
-use cloth_dyn::bends::BendChange;
 use cloth_dyn::model::ClothModel;
 use cloth_dyn::params::ClothParams;
 use tryon_core::math::{Real, Vec3};
@@ -62,15 +61,7 @@ fn a_folded_cloth_keeps_uniform_mass_per_area_and_only_crossing_springs_change()
         .fold((Real::MAX, Real::MIN), |(a, b), &r| (a.min(r), b.max(r)));
     assert!(hi / lo < 1.01, "mass per area {lo}..{hi}");
     let edits = fold::bend_edits(&f, &params);
-    let changes: Vec<BendChange> = edits
-        .iter()
-        .map(|e| BendChange {
-            a: e.a,
-            b: e.b,
-            rest_scale: e.rest_scale,
-            stiffness_scale: e.stiffness_scale,
-        })
-        .collect();
+    let changes = tryon_pipeline::folding::bend_changes(&edits);
     let before = m.springs.clone();
     assert_eq!(m.change_bends(&changes), edits.len());
     let named: std::collections::HashSet<(u32, u32)> = edits.iter().map(|e| (e.a, e.b)).collect();

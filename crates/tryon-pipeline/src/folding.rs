@@ -35,6 +35,19 @@ impl Folds {
     }
 }
 
+/// The fold stage's bend-spring edits as the cloth model's changes.
+pub fn bend_changes(edits: &[fold::BendEdit]) -> Vec<BendChange> {
+    edits
+        .iter()
+        .map(|e| BendChange {
+            a: e.a,
+            b: e.b,
+            rest_scale: e.rest_scale,
+            stiffness_scale: e.stiffness_scale,
+        })
+        .collect()
+}
+
 /// `dressed` with the scene's folds made; unchanged, with no folds, when it has none.
 pub(crate) fn apply(
     scene: &Scene,
@@ -49,15 +62,7 @@ pub(crate) fn apply(
     let p = scene.folding.params();
     let lines: Vec<fold::FoldLine> = scene.fold.iter().map(|f| f.line()).collect();
     let folded = fold::build(&dressed.mesh, &lines, &p)?;
-    let bends = fold::bend_edits(&folded, &p)
-        .into_iter()
-        .map(|e| BendChange {
-            a: e.a,
-            b: e.b,
-            rest_scale: e.rest_scale,
-            stiffness_scale: e.stiffness_scale,
-        })
-        .collect();
+    let bends = bend_changes(&fold::bend_edits(&folded, &p));
     let reach = p.rings + 2;
     let (tris, _) = folded.mesh.triangulate();
     let shaped = folded
