@@ -118,3 +118,65 @@ fn bad_fold_lines_are_errors_naming_the_fold_and_what_is_wrong() {
     .unwrap_or_default();
     assert!(e.contains("fold") && e.contains("point"), "{e}");
 }
+
+/// A line drawn in the canvas's pixels (P3's input) lands on the garment and is made into a fold
+/// like a line given in metres; pixels off the garment, outside the canvas, or a line given both
+/// ways are errors naming the fold.
+#[test]
+fn a_line_drawn_on_the_canvas_becomes_a_fold_and_bad_pixels_are_named() {
+    let plain = Scene::parse(&with_fold(""), std::path::Path::new("f.toml")).unwrap();
+    let (canvas, image) = tryon_pipeline::canvas::picture(&plain).unwrap();
+    let (w, h) = (canvas.width as usize, canvas.height as usize);
+    // The garment's pixels: its colour's hue (blue), unlike the body and the grey background.
+    let blue = |x: usize, y: usize| {
+        let c = &image.rgb[(y * w + x) * 3..][..3];
+        c[2] as i32 > c[0] as i32 + 30 && c[2] > c[1]
+    };
+    let cells: Vec<(usize, usize)> = (0..h)
+        .flat_map(|y| (0..w).map(move |x| (x, y)))
+        .filter(|&(x, y)| blue(x, y))
+        .collect();
+    assert!(cells.len() > 1000, "{} garment pixels", cells.len());
+    let y = cells.iter().map(|c| c.1).sum::<usize>() / cells.len();
+    let row: Vec<usize> = cells.iter().filter(|c| c.1 == y).map(|c| c.0).collect();
+    let (x0, x1) = (row[0], row[row.len() - 1]);
+    let (a, b) = (x0 + (x1 - x0) / 4, x1 - (x1 - x0) / 4);
+    assert!(blue(a, y) && blue(b, y));
+    let line = format!("[[fold]]\nheight = 0.02\nscreen = [[{a}, {y}], [{b}, {y}]]\n");
+    let p = assemble(&with_fold(&line)).unwrap();
+    assert_eq!(p.folds.folds.len(), 1);
+    let shaped = p.folds.shaped[0].expect("measured");
+    assert!(shaped > 0.01, "the fold stands {shaped} m");
+    // The fold's ridge runs across the square (x from one quarter to three quarters of the way).
+    let ridge = &p.folds.folds[0].ridge;
+    let xs: Vec<Real> = ridge
+        .iter()
+        .map(|&v| p.garment.positions[v as usize].x)
+        .collect();
+    let span = xs.iter().cloned().fold(Real::MIN, Real::max)
+        - xs.iter().cloned().fold(Real::MAX, Real::min);
+    assert!(span > 0.2, "the ridge spans {span} m");
+    let cases = [
+        (
+            format!("screen = [[2, 2], [{b}, {y}]]"),
+            "fold 0: screen point 0 [2.0, 2.0] shows no garment",
+        ),
+        (
+            format!("screen = [[{a}, {y}], [5000, {y}]]"),
+            "fold[0].screen",
+        ),
+        (
+            format!(
+                "screen = [[{a}, {y}], [{b}, {y}]]\npoints = [[0.0, 0.5, 0.0], [0.1, 0.5, 0.0]]"
+            ),
+            "not both",
+        ),
+        ("".to_string(), "fold[0].points"),
+    ];
+    for (keys, message) in cases {
+        let e = assemble(&with_fold(&format!("[[fold]]\nheight = 0.02\n{keys}\n")))
+            .err()
+            .unwrap_or_default();
+        assert!(e.contains(message), "{keys}: {e}");
+    }
+}

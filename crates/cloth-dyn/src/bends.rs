@@ -48,6 +48,9 @@ impl ClothModel {
             changed += 1;
         }
         if changed > 0 {
+            // The force loop reads the packed copy: without this the changes reach only the
+            // limits (found in session 48: the folds' springs had kept their old forces).
+            self.packed = self.springs.packed();
             self.bend_limit_springs =
                 crate::strain::limit_springs(&self.springs, self.bend.clone(), &self.inv_mass);
         }
@@ -102,5 +105,11 @@ mod tests {
             assert_eq!(m.springs.k_stretch[s], before.springs.k_stretch[s]);
             assert_eq!(m.spring_scale[s], 1.0);
         }
+        // The force loop's copy: the changed spring's rest halved, its damping times 4.
+        let (old, new) = (&before.packed[k], &m.packed[k]);
+        assert_eq!((new.i, new.j), (a, b));
+        assert_eq!(new.rest, 0.5 * old.rest);
+        assert_eq!(new.damping, 4.0 * old.damping);
+        assert_eq!(m.packed[0], before.packed[0]);
     }
 }

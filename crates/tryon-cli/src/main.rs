@@ -64,6 +64,19 @@ enum Command {
         #[arg(long = "set", value_name = "TABLE.KEY=VALUE")]
         sets: Vec<String>,
     },
+    /// Write the picture folds are drawn on (P3): the scene's garment as dressed on the body at
+    /// the start, framed as the preview frames it, at `[output] preview_width` x `preview_height`.
+    /// A `[[fold]] screen` line is given in this picture's pixels.
+    Canvas {
+        /// The scene file (TOML).
+        scene: PathBuf,
+        /// The PNG to write; default out/<scene name>/canvas.png.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Override a scene value, as `run --set` does (repeatable).
+        #[arg(long = "set", value_name = "TABLE.KEY=VALUE")]
+        sets: Vec<String>,
+    },
     /// Summarise an asset: OBJ, BVH or MakeHuman file (counts, joints, frames, fps, bounding box,
     /// likely units).
     Inspect {
@@ -254,6 +267,26 @@ fn main() -> ExitCode {
                 }
             })
             .map_err(|e| Failure::BadInput(e.to_string())),
+        Command::Canvas { scene, out, sets } => load(&scene, &sets).and_then(|s| {
+            let path =
+                out.unwrap_or_else(|| Path::new("out").join(&s.scene.name).join("canvas.png"));
+            if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+                std::fs::create_dir_all(dir).map_err(|e| {
+                    Failure::Internal(format!("cannot create {}: {e}", dir.display()))
+                })?;
+            }
+            mark_generated(&path);
+            match tryon_pipeline::canvas::write(&s, &path) {
+                Ok(()) => {
+                    println!("wrote {}", path.display());
+                    Ok(())
+                }
+                Err(e @ tryon_pipeline::build::AssembleError::Canvas(_)) => {
+                    Err(Failure::Internal(e.to_string()))
+                }
+                Err(e) => Err(Failure::BadInput(format!("{}: {e}", scene.display()))),
+            }
+        }),
         Command::Check { scene, sets } => load(&scene, &sets).and_then(|s| {
             let p = assemble(s, &scene.display().to_string())?;
             println!(

@@ -69,6 +69,23 @@ impl Camera {
     }
 }
 
+impl Camera {
+    /// The ray through pixel `(px, py)` (pixel units, the origin at the top-left corner of the
+    /// picture, x to the right, y down) of a `width` x `height` picture taken by this camera, as
+    /// [`render`] projects: the eye and a unit direction.
+    pub fn ray(&self, px: Real, py: Real, width: u32, height: u32) -> (Vec3, Vec3) {
+        let (w, h) = (width.max(1) as Real, height.max(1) as Real);
+        let fwd = (self.target - self.eye).normalize();
+        let right = fwd.cross(&self.up).normalize();
+        let up = right.cross(&fwd);
+        let f = 1.0 / (self.fov_y.to_radians() * 0.5).tan();
+        let x = px / w * 2.0 - 1.0;
+        let y = 1.0 - py / h * 2.0;
+        let dir = fwd + right * (x * w / h / f) + up * (y / f);
+        (self.eye, dir.normalize())
+    }
+}
+
 /// An RGB image.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image {
@@ -230,6 +247,49 @@ pub fn write_png(path: &Path, image: &Image) -> Result<(), PreviewError> {
 mod tests {
     use super::*;
     use tryon_core::shapes::icosphere;
+
+    #[test]
+    fn the_ray_through_a_drawn_pixel_passes_through_what_was_drawn_there() {
+        // A big grey ball frames the picture; a small red one sits off to one side. The ray
+        // through the middle of the red pixels must pass through the red ball.
+        let big = icosphere(1.0, 2, Vec3::zeros());
+        let centre = Vec3::new(-0.9, -0.3, 0.6);
+        let small = icosphere(0.05, 2, centre);
+        let (tb, _) = big.triangulate();
+        let (ts, _) = small.triangulate();
+        let meshes = [
+            PreviewMesh {
+                positions: &big.positions,
+                triangles: &tb,
+                color: [90, 90, 90],
+            },
+            PreviewMesh {
+                positions: &small.positions,
+                triangles: &ts,
+                color: [250, 0, 0],
+            },
+        ];
+        let cam = Camera::framing(&meshes);
+        let (w, h) = (300, 200);
+        let img = render(&meshes, &cam, w, h);
+        let (mut sx, mut sy, mut n) = (0.0, 0.0, 0.0);
+        for (k, px) in img.rgb.chunks(3).enumerate() {
+            if px[0] > 60 && px[1] == 0 && px[2] == 0 {
+                sx += (k % w as usize) as Real + 0.5;
+                sy += (k / w as usize) as Real + 0.5;
+                n += 1.0;
+            }
+        }
+        assert!(n > 10.0, "the small ball is drawn ({n} pixels)");
+        let (eye, dir) = cam.ray(sx / n, sy / n, w, h);
+        assert!((dir.norm() - 1.0).abs() < 1e-12);
+        let miss = (centre - eye) - dir * (centre - eye).dot(&dir);
+        assert!(
+            miss.norm() < 0.05,
+            "the ray misses the ball's centre by {}",
+            miss.norm()
+        );
+    }
 
     #[test]
     fn sphere_is_drawn_in_the_middle_and_round_trips_through_png() {

@@ -27,7 +27,7 @@ impl Pipeline {
         // of the layers under it, joined into one cloth.
         let dressed = crate::wardrobe::dress(&scene, &body, collides)?;
         // Folds drawn on the garment (P3): the mesh subdivided and shaped before the cloth is built.
-        let (dressed, folds) = crate::folding::apply(&scene, dressed)?;
+        let (dressed, folds) = crate::folding::apply(&scene, &body.mesh, dressed)?;
         let (garment, placed_moved) = (dressed.mesh.clone(), dressed.placed_moved);
         let attachments = dressed.attachments.clone();
         // The referee judges the true surface.

@@ -57,6 +57,15 @@ pub enum AssembleError {
     Fold(#[from] fold::FoldError),
     #[error("[[fold]]: folds are drawn on a scene with one garment; this one wears {0}")]
     FoldGarments(usize),
+    #[error("[[fold]] fold {fold}: screen point {point} {pixel:?} {reason}")]
+    FoldScreen {
+        fold: usize,
+        point: usize,
+        pixel: [Real; 2],
+        reason: &'static str,
+    },
+    #[error("canvas: {0}")]
+    Canvas(tryon_io::preview::PreviewError),
 }
 
 /// The body as assembled: its rest mesh, the model, the motion (`None` for a body that holds

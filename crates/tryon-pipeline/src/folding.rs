@@ -51,6 +51,7 @@ pub fn bend_changes(edits: &[fold::BendEdit]) -> Vec<BendChange> {
 /// `dressed` with the scene's folds made; unchanged, with no folds, when it has none.
 pub(crate) fn apply(
     scene: &Scene,
+    body: &tryon_core::mesh::PolyMesh,
     mut dressed: Dressed,
 ) -> Result<(Dressed, Folds), AssembleError> {
     if scene.fold.is_empty() {
@@ -60,7 +61,7 @@ pub(crate) fn apply(
         return Err(AssembleError::FoldGarments(dressed.wear.len()));
     }
     let p = scene.folding.params();
-    let lines: Vec<fold::FoldLine> = scene.fold.iter().map(|f| f.line()).collect();
+    let lines = crate::canvas::fold_lines(scene, body, &dressed.mesh)?;
     let folded = fold::build(&dressed.mesh, &lines, &p)?;
     let bends = bend_changes(&fold::bend_edits(&folded, &p));
     let reach = p.rings + 2;

@@ -9,6 +9,7 @@
 
 pub mod assemble;
 pub mod build;
+pub mod canvas;
 pub mod crossings;
 pub mod drape;
 pub mod export;

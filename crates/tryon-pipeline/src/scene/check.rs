@@ -4,6 +4,7 @@
 //! key and what is allowed.
 
 use super::*;
+use tryon_core::math::Real;
 use tryon_core::measure::MeasureError;
 
 /// An error at `table.key` of `text`.
@@ -99,6 +100,7 @@ impl Scene {
     pub(super) fn check(&self, text: &str, file: &Path) -> Result<(), SceneError> {
         self.check_ranges(text, file)?;
         self.check_values(text, file)?;
+        self.check_fold_lines(text, file)?;
         self.check_combinations(text, file)
     }
 
@@ -130,6 +132,41 @@ impl Scene {
             t.insert("garment".into(), toml::Value::try_from(w).map_err(syntax)?);
             let wear = |k: &docs::Key| k.table == "garment" && k.kind.is_none();
             within_ranges(&keys, &toml::Value::Table(t), wear, (text, file, n))?;
+        }
+        Ok(())
+    }
+
+    /// Each `[[fold]]` line given one way (points or pixels), its pixels inside the canvas.
+    fn check_fold_lines(&self, text: &str, file: &Path) -> Result<(), SceneError> {
+        let (w, h) = (self.output.preview_width, self.output.preview_height);
+        for (n, f) in self.fold.iter().enumerate() {
+            let err = |key: &str, value: String, expected: String| SceneError::Invalid {
+                file: file.to_path_buf(),
+                line: line_of_nth(text, "fold", n, key),
+                key: format!("fold[{n}].{key}"),
+                value,
+                expected,
+            };
+            let one_way =
+                "a line as `points` (m) or as `screen` (pixels of `tryon canvas`), not both";
+            match (f.points.is_empty(), f.screen.is_empty()) {
+                (true, true) => return Err(err("points", "none".into(), one_way.into())),
+                (false, false) => {
+                    return Err(err("screen", "beside points".into(), one_way.into()));
+                }
+                _ => {}
+            }
+            let inside = |p: &[Real; 2]| {
+                p.iter().all(|x| x.is_finite())
+                    && (0.0..=w as Real).contains(&p[0])
+                    && (0.0..=h as Real).contains(&p[1])
+            };
+            if let Some(p) = f.screen.iter().find(|p| !inside(p)) {
+                let expected = format!(
+                    "pixels inside the {w} x {h} canvas ([output] preview_width x preview_height)"
+                );
+                return Err(err("screen", format!("{p:?}"), expected));
+            }
         }
         Ok(())
     }

@@ -5,17 +5,24 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use tryon_core::math::Real;
 
-/// One fold drawn on the garment (`[[fold]]`, as many as wanted): a line of points on the
-/// garment as it is placed on the body at the start (world coordinates, m), each snapped to the
-/// nearest surface point within `[folding] snap`.
+/// One fold drawn on the garment (`[[fold]]`, as many as wanted): a line given either as points
+/// on the garment as it is placed on the body at the start (`points`, world coordinates, m), each
+/// snapped to the nearest surface point within `[folding] snap`, or, as P3 draws it, in the
+/// picture `tryon canvas` writes (`screen`, pixels), each landing where its pixel shows the garment.
 #[derive(Clone, Debug, Deserialize, Serialize, JsonSchema, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct FoldSpec {
     /// A ridge stands out of the garment (along its outward normal), a valley sinks in.
     #[serde(default)]
     pub shape: FoldShape,
-    /// The line's points in order, at least two.
+    /// The line's points in order, at least two (m; or give `screen`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub points: Vec<[Real; 3]>,
+    /// The line's points in order, at least two, as pixels `[x, y]` of the canvas picture
+    /// (`tryon canvas`: the dressed garment as the preview frames it, `[output] preview_width` x
+    /// `preview_height`, x to the right and y down from the top-left corner; or give `points`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub screen: Vec<[Real; 2]>,
     /// How far the ridge stands out, or the valley sinks in (m).
     #[schemars(range(min = 0.001, max = 1.0))]
     pub height: Real,
