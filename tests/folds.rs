@@ -76,10 +76,15 @@ fn a_folded_cloth_keeps_uniform_mass_per_area_and_only_crossing_springs_change()
     }
 }
 
+/// A 12-particle square above a sphere with `fold`, drawn on the square as placed.
 fn with_fold(fold: &str) -> String {
+    with_folding("[folding]\ndrape = 0.0\n", fold)
+}
+
+fn with_folding(folding: &str, fold: &str) -> String {
     format!(
         "[scene]\nname = \"f\"\nduration = 0.1\n[body]\nkind = \"sphere\"\n[garment]\nkind = \"square\"\n\
-         particles = 12\n[motion]\nkind = \"still\"\n{fold}"
+         particles = 12\n[motion]\nkind = \"still\"\n{folding}{fold}"
     )
 }
 
@@ -178,5 +183,34 @@ fn a_line_drawn_on_the_canvas_becomes_a_fold_and_bad_pixels_are_named() {
             .err()
             .unwrap_or_default();
         assert!(e.contains(message), "{keys}: {e}");
+    }
+}
+
+/// With `[folding] drape`, the fold is drawn on the garment as it hangs: the cloth starts from
+/// the draped shape, which is not the placed one, while the garment's modelled shape (its rest
+/// lengths) is the one the scene places, unfolded where the fold does not reach.
+#[test]
+fn a_fold_drawn_on_the_draped_garment_starts_there_and_keeps_the_cut() {
+    // Points above the square's middle, snapped to wherever it hangs.
+    let folding = "[folding]\ndrape = 0.5\nsnap = 0.5\n";
+    let line = "[[fold]]\nheight = 0.02\npoints = [[-0.3, 0.5, 0.01], [0.3, 0.5, 0.02]]\n";
+    let placed = assemble(&with_fold("")).unwrap();
+    let draped = assemble(&with_folding(folding, line)).unwrap();
+    let start = draped.folds.start.as_ref().expect("drawn on the drape");
+    assert_eq!(&draped.cloth.positions, start);
+    let n0 = placed.garment.positions.len();
+    // The square sags over the sphere while it hangs: the start is far from the placed shape.
+    let sag = (0..n0)
+        .map(|v| (start[v] - placed.garment.positions[v]).norm())
+        .fold(0.0, Real::max);
+    assert!(sag > 0.05, "the drape moved the square {sag} m");
+    // Away from the line, the modelled shape is the placed one.
+    let far: Vec<usize> = (0..n0)
+        .filter(|&v| (placed.garment.positions[v].z).abs() > 0.25)
+        .collect();
+    assert!(far.len() > 20);
+    for v in far {
+        let d = (draped.garment.positions[v] - placed.garment.positions[v]).norm();
+        assert!(d < 1e-9, "vertex {v} moved {d} m in the modelled shape");
     }
 }

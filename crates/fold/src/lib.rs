@@ -114,6 +114,50 @@ pub struct Folded {
     /// Per vertex, whether smoothing may move it (new vertices and `rings` rings around them,
     /// less the mesh's open boundary).
     pub region: Vec<bool>,
+    /// Per added vertex (in order, from the first index past the original mesh's), the original
+    /// edge `(a, b)` it was made on and where along it (`t`, from `a`), before it was moved.
+    pub made_on: Vec<(u32, u32, Real)>,
+}
+
+impl Folded {
+    /// Where each vertex was before the fold moved it, for the original mesh's vertices
+    /// `original` (the added ones on their edges): with [`Folded::carried`], the fold's shape
+    /// moved onto another shape of the same garment.
+    pub fn unmoved(&self, original: &[Vec3]) -> Vec<Vec3> {
+        let mut out = original.to_vec();
+        out.extend(self.made_on.iter().map(|&(a, b, t)| {
+            let (xa, xb) = (original[a as usize], original[b as usize]);
+            xa + (xb - xa) * t
+        }));
+        out
+    }
+
+    /// The folded mesh's positions carried onto `other`, another shape of the original mesh
+    /// the fold was made on (`original`): each vertex moved from its place on `other` as the fold
+    /// moved it from its place on `original`, the move turned as the surface turned there (the
+    /// least rotation taking the one shape's vertex normal to the other's), so a fold made on a
+    /// wrinkled drape stands out of a smooth modelled shape the same way. `None` when the counts
+    /// differ.
+    pub fn carried(&self, original: &[Vec3], other: &[Vec3]) -> Option<Vec<Vec3>> {
+        let n0 = self.mesh.positions.len().checked_sub(self.made_on.len())?;
+        if original.len() != n0 || other.len() != n0 {
+            return None;
+        }
+        let (before, base) = (self.unmoved(original), self.unmoved(other));
+        let (tris, _) = self.mesh.triangulate();
+        let (mut nb, mut no) = (Vec::new(), Vec::new());
+        vertex_normals(&before, &tris, &mut nb);
+        vertex_normals(&base, &tris, &mut no);
+        Some(
+            (self.mesh.positions.iter().enumerate())
+                .map(|(v, x)| {
+                    let turn = tryon_core::math::UnitQuat::rotation_between(&nb[v], &no[v])
+                        .unwrap_or_else(tryon_core::math::UnitQuat::identity);
+                    base[v] + turn * (x - before[v])
+                })
+                .collect(),
+        )
+    }
 }
 
 /// Why a fold could not be made. Folds are counted from 0 in the order given.

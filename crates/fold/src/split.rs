@@ -42,6 +42,7 @@ pub(crate) fn split_along(mesh: &PolyMesh, w: &Walked) -> Result<Folded, FoldErr
         incident: vec![Vec::new(); mesh.positions.len()],
         faces,
         done: HashMap::new(),
+        made_on: Vec::new(),
     };
     for (k, f) in s.faces.iter().enumerate() {
         for &v in f.vertices() {
@@ -89,6 +90,7 @@ pub(crate) fn split_along(mesh: &PolyMesh, w: &Walked) -> Result<Folded, FoldErr
         folds,
         is_new,
         region: vec![false; n],
+        made_on: s.made_on,
     })
 }
 
@@ -100,6 +102,8 @@ struct Splitter {
     faces: Vec<Face>,
     /// Per original edge, the crossings split into it so far: (t along it, vertex).
     done: HashMap<(u32, u32), Vec<(Real, u32)>>,
+    /// Per added vertex, its original edge and t along it.
+    made_on: Vec<(u32, u32, Real)>,
 }
 
 impl Splitter {
@@ -130,6 +134,7 @@ impl Splitter {
         list.push((c.t, v));
         let (xa, xb) = (self.positions[c.a as usize], self.positions[c.b as usize]);
         self.positions.push(xa + (xb - xa) * c.t);
+        self.made_on.push((c.a, c.b, c.t));
         self.incident.push(Vec::new());
         self.split_edge(lo, hi, v);
         v

@@ -319,3 +319,45 @@ proptest! {
         }
     }
 }
+
+/// Each added vertex was made on its recorded original edge (its spiky position is there, raised
+/// by the line's height along the sheet's normal), and carrying the fold onto the same sheet
+/// moved gives the folded sheet moved, onto itself the folded sheet.
+#[test]
+fn added_vertices_come_from_their_edges_and_a_fold_carries_onto_a_moved_sheet() {
+    let mesh = sheet();
+    let f = subdivide(&mesh, &[across()], &FoldParams::default()).unwrap();
+    let n0 = mesh.positions.len();
+    assert_eq!(f.made_on.len(), f.mesh.positions.len() - n0);
+    assert!(!f.made_on.is_empty());
+    for (k, &(a, b, t)) in f.made_on.iter().enumerate() {
+        let (xa, xb) = (mesh.positions[a as usize], mesh.positions[b as usize]);
+        assert!(
+            (xa - xb).norm() < 0.08,
+            "an edge of the 5 cm grid (or its diagonal)"
+        );
+        assert!(t > 0.0 && t < 1.0);
+        let on_edge = xa + (xb - xa) * t;
+        let x = f.mesh.positions[n0 + k];
+        // The spiky fold: straight up from the edge by the drawn height (tapered at the ends).
+        assert!((x.x - on_edge.x).abs() < 1e-12 && (x.z - on_edge.z).abs() < 1e-12);
+        assert!(x.y >= -1e-12 && x.y <= 0.04 + 1e-12);
+    }
+    let folded = build(&mesh, &[across()], &FoldParams::default()).unwrap();
+    let same = folded.carried(&mesh.positions, &mesh.positions).unwrap();
+    assert_eq!(same, folded.mesh.positions);
+    let lift = Vec3::new(0.1, 1.0, -0.2);
+    let moved: Vec<Vec3> = mesh.positions.iter().map(|p| p + lift).collect();
+    let carried = folded.carried(&mesh.positions, &moved).unwrap();
+    for (c, x) in carried.iter().zip(&folded.mesh.positions) {
+        assert!((c - (x + lift)).norm() < 1e-12);
+    }
+    assert!(folded.carried(&mesh.positions, &moved[1..]).is_none());
+    // Turned about an axis in the sheet's plane, the fold turns with it: the folded sheet turned.
+    let turn = tryon_core::math::UnitQuat::from_axis_angle(&Vec3::x_axis(), 0.5);
+    let turned: Vec<Vec3> = mesh.positions.iter().map(|p| turn * p).collect();
+    let carried = folded.carried(&mesh.positions, &turned).unwrap();
+    for (c, x) in carried.iter().zip(&folded.mesh.positions) {
+        assert!((c - turn * x).norm() < 1e-9, "{c} against {}", turn * x);
+    }
+}

@@ -93,7 +93,14 @@ impl Pipeline {
             .duration
             .unwrap_or(scene.scene.settle + body.clip_len);
         let frames = (duration * fps).round().max(1.0) as usize;
-        let cloth = solver.initial_frame();
+        let mut cloth = solver.initial_frame();
+        if let Some(start) = folds
+            .start
+            .as_ref()
+            .filter(|x| x.len() == cloth.positions.len())
+        {
+            cloth.positions.clone_from(start);
+        }
         Ok(Pipeline {
             scene,
             body_mesh: body.mesh,

@@ -1,10 +1,11 @@
-//! The canvas a fold is drawn on, as P3 draws them: the dressed garment on the body at the start,
-//! seen by the preview's camera (`Camera::framing` of body and garment) at the scene's preview
+//! The canvas a fold is drawn on, as P3 draws them: the dressed garment on the body at the start
+//! (after `[folding] drape`, as the folds are made), seen by the preview's camera (`Camera::framing` of body and garment) at the scene's preview
 //! size. `tryon canvas` writes it; a `[[fold]] screen` line's pixels land on the garment where the
 //! ray through each pixel first meets it.
 
 use crate::build::AssembleError;
 use crate::scene::Scene;
+use crate::wardrobe::Dressed;
 use parry3d_f64::math::{Point, Vector};
 use parry3d_f64::query::{Ray, RayCast};
 use parry3d_f64::shape::Triangle;
@@ -113,13 +114,18 @@ fn nearest_hit(ray: &Ray, (x, tris): (&[Vec3], &[[u32; 3]])) -> Option<Real> {
         .min_by(|a, b| a.total_cmp(b))
 }
 
-/// The canvas of `scene` (the body dressed, before any fold or step) and its picture.
+/// The canvas of `scene` (the body dressed and draped, before any fold) and its picture.
 pub fn picture(scene: &Scene) -> Result<(Canvas, Image), AssembleError> {
     let body = crate::build::body(scene)?;
     let collides = scene.effects.body_collision != crate::scene::CollisionMethod::None;
     let dressed = crate::wardrobe::dress(scene, &body, collides)?;
-    let canvas = Canvas::new(scene, &body.mesh, &dressed.mesh);
-    let image = canvas.draw(&body.mesh, &dressed.mesh);
+    let (draped, body) = drape(scene, &body.mesh, &dressed)?;
+    let mut garment = dressed.mesh;
+    if let Some(x) = draped {
+        garment.positions = x;
+    }
+    let canvas = Canvas::new(scene, &body, &garment);
+    let image = canvas.draw(&body, &garment);
     Ok((canvas, image))
 }
 
@@ -127,6 +133,41 @@ pub fn picture(scene: &Scene) -> Result<(Canvas, Image), AssembleError> {
 pub fn write(scene: &Scene, path: &Path) -> Result<(), AssembleError> {
     let (_, image) = picture(scene)?;
     tryon_io::preview::write_png(path, &image).map_err(AssembleError::Canvas)
+}
+
+/// The garment's positions after it hangs `[folding] drape` seconds on the body held in the
+/// motion's first pose (P3 draws folds on a garment at rest: a fold drawn on the garment as
+/// placed is pushed about while the garment settles), with the body's positions in that pose;
+/// `None` and the body as given for a drape of 0.
+pub fn drape(
+    scene: &Scene,
+    body: &PolyMesh,
+    dressed: &Dressed,
+) -> Result<(Option<Vec<Vec3>>, PolyMesh), AssembleError> {
+    let t = scene.folding.drape;
+    if t <= 0.0 {
+        return Ok((None, body.clone()));
+    }
+    let mut s = scene.clone();
+    s.fold.clear();
+    s.scene.settle = s.scene.settle.max(t);
+    s.scene.duration = Some(t);
+    s.output.referee_every = 0;
+    let mut p = crate::Pipeline::new(s)?;
+    let frames = (t * scene.scene.fps).round().max(1.0) as usize;
+    let out = p.run(Some(frames), |_, _| {});
+    let mut posed = body.clone();
+    let Some(last) = out.frames.last().filter(|f| {
+        f.garment.len() == dressed.mesh.positions.len()
+            && f.garment.iter().all(|x| x.iter().all(|c| c.is_finite()))
+    }) else {
+        return Ok((None, posed));
+    };
+    let b = p.body_at(last.pose.as_ref());
+    if b.len() == posed.positions.len() {
+        posed.positions = b;
+    }
+    Ok((Some(last.garment.clone()), posed))
 }
 
 /// The scene's `[[fold]]` lines as the fold stage takes them, `screen` lines landed on `garment`.

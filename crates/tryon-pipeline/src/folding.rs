@@ -8,6 +8,7 @@ use crate::scene::Scene;
 use crate::wardrobe::Dressed;
 use cloth_dyn::bends::BendChange;
 use tryon_core::math::{Real, Vec3};
+use tryon_core::mesh::PolyMesh;
 
 /// The folds made, as the run measures them.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -19,6 +20,9 @@ pub struct Folds {
     pub bends: Vec<BendChange>,
     /// Each fold's height as shaped, before the simulation (m; `None` when not measurable).
     pub shaped: Vec<Option<Real>>,
+    /// Where the cloth starts when the folds were drawn on the draped garment (`[folding]
+    /// drape`): the draped shape, folded; the garment mesh is then its modelled shape, folded.
+    pub start: Option<Vec<Vec3>>,
 }
 
 impl Folds {
@@ -51,7 +55,7 @@ pub fn bend_changes(edits: &[fold::BendEdit]) -> Vec<BendChange> {
 /// `dressed` with the scene's folds made; unchanged, with no folds, when it has none.
 pub(crate) fn apply(
     scene: &Scene,
-    body: &tryon_core::mesh::PolyMesh,
+    body: &PolyMesh,
     mut dressed: Dressed,
 ) -> Result<(Dressed, Folds), AssembleError> {
     if scene.fold.is_empty() {
@@ -60,9 +64,16 @@ pub(crate) fn apply(
     if dressed.wear.len() > 1 {
         return Err(AssembleError::FoldGarments(dressed.wear.len()));
     }
+    let (draped, body) = crate::canvas::drape(scene, body, &dressed)?;
+    // The folds are drawn on the garment as it hangs, and carried onto its modelled shape for
+    // the rest lengths (the draped garment is stretched where it hangs from).
+    let mut on = dressed.mesh.clone();
+    if let Some(x) = &draped {
+        on.positions.clone_from(x);
+    }
     let p = scene.folding.params();
-    let lines = crate::canvas::fold_lines(scene, body, &dressed.mesh)?;
-    let folded = fold::build(&dressed.mesh, &lines, &p)?;
+    let lines = crate::canvas::fold_lines(scene, &body, &on)?;
+    let mut folded = fold::build(&on, &lines, &p)?;
     let bends = bend_changes(&fold::bend_edits(&folded, &p));
     let reach = p.rings + 2;
     let (tris, _) = folded.mesh.triangulate();
@@ -75,6 +86,10 @@ pub(crate) fn apply(
     if let Some(w) = dressed.wear.first_mut() {
         w.particles.end = n;
     }
+    let start = draped.map(|_| folded.mesh.positions.clone());
+    if let Some(rest) = folded.carried(&on.positions, &dressed.mesh.positions) {
+        folded.mesh.positions = rest;
+    }
     dressed.mesh = folded.mesh;
     Ok((
         dressed,
@@ -83,6 +98,7 @@ pub(crate) fn apply(
             reach,
             bends,
             shaped,
+            start,
         },
     ))
 }

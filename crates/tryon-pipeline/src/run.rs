@@ -139,7 +139,7 @@ impl From<mocap_retarget::clearance::Clearance> for RetargetStats {
 }
 
 /// Per-frame figures (for plots and regressions).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct FrameStats {
     pub frame: usize,
     pub max_penetration_m: Real,
@@ -153,6 +153,9 @@ pub struct FrameStats {
     pub retries: u32,
     /// Sub-frames the body moved in.
     pub body_parts: u32,
+    /// Each fold's height over its drawn height (NaN where not measurable; absent without folds).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub fold_retention: Vec<Real>,
 }
 
 /// Everything stats.json holds.
@@ -263,6 +266,11 @@ impl Pipeline {
         }
         let every = self.scene.output.referee_every;
         let garment_triangles = self.output_triangles();
+        // The folds are measured on the coarse cloth.
+        let fold_triangles = match self.folds.folds.is_empty() {
+            true => Vec::new(),
+            false => self.garment.triangulate().0,
+        };
         let start_distances = if every > 0 {
             let garment = if self.surface_stages.is_empty() {
                 &self.cloth.positions
@@ -411,6 +419,7 @@ impl Pipeline {
                     contacts: report.contacts,
                     retries: report.retries,
                     body_parts: report.body_parts,
+                    fold_retention: (self.folds).retention(&self.cloth.positions, &fold_triangles),
                 });
             }
             sink.frame(&FrameRecord {

@@ -69,6 +69,13 @@ pub struct FoldingSection {
     /// Stiffness of the bend springs crossing a line, as a multiple of the others'.
     #[schemars(range(min = 1.0, max = 1000.0))]
     pub bend_stiffen: Real,
+    /// Seconds the garment hangs on the body, held in the motion's first pose, before the folds
+    /// are drawn on it (P3 draws on a garment at rest; a fold drawn on the garment as placed is
+    /// pushed about while it settles). The garment's cut is kept: the fold is carried onto its
+    /// modelled shape for the rest lengths, and the cloth starts from the draped shape, folded.
+    /// 0 draws on the garment as placed.
+    #[schemars(range(min = 0.0, max = 10.0))]
+    pub drape: Real,
 }
 
 impl Default for FoldingSection {
@@ -88,6 +95,7 @@ impl Default for FoldingSection {
             snap: p.snap,
             bend_shorten: p.bend_shorten,
             bend_stiffen: p.bend_stiffen,
+            drape: 1.0,
         }
     }
 }
