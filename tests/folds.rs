@@ -214,3 +214,32 @@ fn a_fold_drawn_on_the_draped_garment_starts_there_and_keeps_the_cut() {
         assert!(d < 1e-9, "vertex {v} moved {d} m in the modelled shape");
     }
 }
+
+/// A fold that only assembling finds wrong (off the garment) is placed at its `[[fold]]` line of
+/// the scene file.
+#[test]
+fn a_fold_found_wrong_when_assembled_names_its_file_and_line() {
+    let text = with_fold(
+        "[[fold]]\nheight = 0.02\npoints = [[-0.3, 0.5, 0.01], [0.3, 0.5, 0.02]]\n\n\
+         [[fold]]\nheight = 0.02\npoints = [[0.0, 0.5, 0.0], [0.3, 0.9, 0.0]]\n",
+    );
+    let second = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| l.trim() == "[[fold]]")
+        .nth(1)
+        .map(|(i, _)| i + 1)
+        .unwrap();
+    let dir = std::env::temp_dir().join(format!("tryon-fold-line-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("folds.toml");
+    std::fs::write(&path, &text).unwrap();
+    let scene = Scene::load_with_overrides(&path, &[]).unwrap();
+    let e = Pipeline::new(scene)
+        .err()
+        .map(|e| e.to_string())
+        .unwrap_or_default();
+    let _ = std::fs::remove_dir_all(&dir);
+    let at = format!("{}:{second}: [[fold]] fold 1: point 1 is", path.display());
+    assert!(e.starts_with(&at), "{e}\nexpected to start with {at}");
+}

@@ -204,6 +204,24 @@ pub enum FoldError {
     BadLambda(Real),
 }
 
+impl FoldError {
+    /// The fold the error is about, when it is about one.
+    pub fn fold(&self) -> Option<usize> {
+        use FoldError::*;
+        match self {
+            TooFewPoints { fold, .. }
+            | NonFinitePoint { fold, .. }
+            | BadHeight { fold, .. }
+            | OffGarment { fold, .. }
+            | LeavesGarment { fold, .. }
+            | SelfCrossing { fold, .. }
+            | CrossesFold { fold, .. }
+            | TooShort { fold, .. } => Some(*fold),
+            Mesh(_) | BadLambda(_) => None,
+        }
+    }
+}
+
 /// Subdivides `mesh` along every line and raises (or lowers) the new vertices by the line's
 /// height: the spiky fold of Algorithm 1 step 2, before any smoothing.
 pub fn subdivide(mesh: &PolyMesh, lines: &[FoldLine], p: &FoldParams) -> Result<Folded, FoldError> {

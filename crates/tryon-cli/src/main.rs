@@ -121,7 +121,11 @@ fn mark_generated(out: &Path) {
 }
 
 fn assemble(scene: Scene, file: &str) -> Result<Pipeline, Failure> {
-    Pipeline::new(scene).map_err(|e| Failure::BadInput(format!("{file}: {e}")))
+    Pipeline::new(scene).map_err(|e| match e {
+        // Already placed at its file and line.
+        e @ tryon_pipeline::build::AssembleError::At { .. } => Failure::BadInput(e.to_string()),
+        e => Failure::BadInput(format!("{file}: {e}")),
+    })
 }
 
 fn run(mut p: Pipeline, out: &Path, frames: Option<usize>, quiet: bool) -> Result<(), Failure> {
@@ -283,6 +287,9 @@ fn main() -> ExitCode {
                 }
                 Err(e @ tryon_pipeline::build::AssembleError::Canvas(_)) => {
                     Err(Failure::Internal(e.to_string()))
+                }
+                Err(e @ tryon_pipeline::build::AssembleError::At { .. }) => {
+                    Err(Failure::BadInput(e.to_string()))
                 }
                 Err(e) => Err(Failure::BadInput(format!("{}: {e}", scene.display()))),
             }

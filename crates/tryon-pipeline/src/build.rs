@@ -66,6 +66,34 @@ pub enum AssembleError {
     },
     #[error("canvas: {0}")]
     Canvas(tryon_io::preview::PreviewError),
+    /// An error about something read from a line of the scene file.
+    #[error("{file}:{line}: {source}")]
+    At {
+        file: String,
+        line: usize,
+        source: Box<AssembleError>,
+    },
+}
+
+impl AssembleError {
+    /// This error placed at the line of the scene's `[[fold]]` it is about, when it is about one
+    /// read from a file.
+    pub fn at_fold(self, scene: &Scene) -> AssembleError {
+        let n = match &self {
+            AssembleError::Fold(e) => e.fold(),
+            AssembleError::FoldScreen { fold, .. } => Some(*fold),
+            _ => None,
+        };
+        let line = n.and_then(|n| scene.fold.get(n)).and_then(|f| f.line);
+        match (line, &scene.source) {
+            (Some(line), Some(file)) => AssembleError::At {
+                file: file.display().to_string(),
+                line,
+                source: Box::new(self),
+            },
+            _ => self,
+        }
+    }
 }
 
 /// The body as assembled: its rest mesh, the model, the motion (`None` for a body that holds

@@ -72,8 +72,9 @@ pub(crate) fn apply(
         on.positions.clone_from(x);
     }
     let p = scene.folding.params();
-    let lines = crate::canvas::fold_lines(scene, &body, &on)?;
-    let mut folded = fold::build(&on, &lines, &p)?;
+    let placed = |e: AssembleError| e.at_fold(scene);
+    let lines = crate::canvas::fold_lines(scene, &body, &on).map_err(placed)?;
+    let mut folded = fold::build(&on, &lines, &p).map_err(|e| placed(e.into()))?;
     let bends = bend_changes(&fold::bend_edits(&folded, &p));
     let reach = p.rings + 2;
     let (tris, _) = folded.mesh.triangulate();

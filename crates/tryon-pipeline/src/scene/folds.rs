@@ -23,6 +23,10 @@ pub struct FoldSpec {
     /// `preview_height`, x to the right and y down from the top-left corner; or give `points`).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub screen: Vec<[Real; 2]>,
+    /// The line of the scene file the fold was read from (for errors).
+    #[serde(skip)]
+    #[schemars(skip)]
+    pub line: Option<usize>,
     /// How far the ridge stands out, or the valley sinks in (m).
     #[schemars(range(min = 0.001, max = 1.0))]
     pub height: Real,

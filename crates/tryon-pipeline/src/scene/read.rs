@@ -2,7 +2,7 @@
 //! parsed document itself, so an error points at the offending key or value; a table with a
 //! `kind` is read as the variant the kind names, which owns its keys.
 
-use super::{Scene, SceneError, line_col};
+use super::{FoldSpec, Scene, SceneError, line_col};
 use serde::Deserialize;
 use serde::de::DeserializeOwned;
 use std::path::Path;
@@ -239,12 +239,19 @@ pub(super) fn scene(text: &str, file: &Path) -> Result<Scene, SceneError> {
             "folding" => s.folding = plain(text, file, "folding", value)?,
             "fold" => {
                 let span = value.span();
+                // Each fold remembers its line, for the errors only assembling can find.
+                let fold = |v: Spanned<DeValue<'_>>| {
+                    let line = line_col(text, v.span().start).0;
+                    plain(text, file, "fold", v).map(|f: FoldSpec| FoldSpec {
+                        line: Some(line),
+                        ..f
+                    })
+                };
                 s.fold = match value.into_inner() {
-                    DeValue::Array(items) => items
-                        .into_iter()
-                        .map(|v| plain(text, file, "fold", v))
-                        .collect::<Result<_, _>>()?,
-                    other => vec![plain(text, file, "fold", Spanned::new(span, other))?],
+                    DeValue::Array(items) => {
+                        items.into_iter().map(fold).collect::<Result<_, _>>()?
+                    }
+                    other => vec![fold(Spanned::new(span, other))?],
                 };
             }
             other => {
