@@ -548,3 +548,32 @@ fn the_tracker_probes_and_resolves_the_same_on_any_thread_count() {
         assert!(run(threads) == one, "{threads} threads differ from one");
     }
 }
+
+/// The field follows a moved body, and a frame that does not move the body leaves it as it was.
+#[test]
+fn the_sdf_follows_a_moved_body_and_keeps_its_field_for_a_still_one() {
+    let m = icosphere(0.3, 3, Vec3::zeros());
+    let mut sdf = SdfCollider::new(&m, 0.0, 32).unwrap();
+    let p = Vec3::new(0.0, 0.33, 0.0);
+    let (d0, _) = sdf.sample(&p).unwrap();
+    let still = BodyFrame {
+        time: 0.1,
+        positions: m.positions.clone(),
+        velocities: Vec::new(),
+    };
+    sdf.update(&still);
+    assert_eq!(sdf.sample(&p).unwrap().0, d0);
+    let up = Vec3::new(0.0, 0.02, 0.0);
+    let moved = BodyFrame {
+        time: 0.2,
+        positions: m.positions.iter().map(|x| x + up).collect(),
+        velocities: Vec::new(),
+    };
+    sdf.update(&moved);
+    let (d1, _) = sdf.sample(&p).unwrap();
+    // 3 cm above a 30 cm ball, then 1 cm above it (the field's error is well under a cell).
+    assert!(
+        (d0 - 0.03).abs() < 0.005 && (d1 - 0.01).abs() < 0.005,
+        "{d0} then {d1}"
+    );
+}
