@@ -7,8 +7,9 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::path::Path;
 use std::time::Duration;
-use tryon_pipeline::Scene;
 use tryon_pipeline::build::garment_of;
+use tryon_pipeline::run::Timers;
+use tryon_pipeline::{Pipeline, Scene};
 
 fn fold_build(c: &mut Criterion) {
     let mut group = c.benchmark_group("fold_build");
@@ -35,5 +36,50 @@ fn fold_build(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, fold_build);
+/// One whole frame of the bust scene (P3's shirt stand-in) standing on the still body, on one
+/// thread: every stage `Pipeline::advance` runs (skinning, following, the SDF collider, the cloth
+/// step, the surface) and not the referee. The scene runs untimed to frame 20 (after the drape,
+/// the folds settled); every timed iteration steps frame 21 from that same cloth and solver state.
+/// Issue 22's target: at most 3 ms.
+fn fold_frame(c: &mut Criterion) {
+    let mut group = c.benchmark_group("fold_frame");
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(4));
+    let cases: [(&str, &[&str]); 2] = [("bust_p1", &["cloth.solver=\"p1\""]), ("bust_scene", &[])];
+    for (name, sets) in cases {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/scenes/fold-bust-walk.toml");
+        let mut sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+        sets.push("output.referee_every=0".into());
+        let scene =
+            Scene::load_with_overrides(&path, &sets).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let mut p = Pipeline::new(scene).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let Ok(pool) = rayon::ThreadPoolBuilder::new().num_threads(1).build() else {
+            continue;
+        };
+        let mut timers = Timers::default();
+        let mut st = pool.install(|| {
+            let mut st = p.start();
+            for k in 1..=20 {
+                p.advance(&mut st, p.frame_time(k), &mut timers);
+            }
+            st
+        });
+        let (cloth0, solver0) = (p.cloth.clone(), p.solver.boxed_clone());
+        let t = p.frame_time(21);
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                p.cloth.clone_from(&cloth0);
+                if let Some(s) = solver0.as_ref().and_then(|s| s.boxed_clone()) {
+                    p.solver = s;
+                }
+                pool.install(|| std::hint::black_box(p.advance(&mut st, t, &mut timers)))
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, fold_build, fold_frame);
 criterion_main!(benches);

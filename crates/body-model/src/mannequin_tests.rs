@@ -245,3 +245,31 @@ fn a_shape_made_for_the_next_pose_is_the_posed_body() {
     assert_eq!(a.positions, b.positions);
     assert_ne!(a.positions, end);
 }
+
+/// A body holding still (frames of one pose, each shaped by `shape_next` then posed) keeps its
+/// shape without skinning again, and is the freshly skinned body every frame, press counts
+/// included; the first new pose after it is skinned afresh.
+#[test]
+fn a_body_holding_still_keeps_its_shape_and_moves_when_the_pose_does() {
+    let (mut body, pose) = pressed_mannequin();
+    let mut fresh = body.clone();
+    let mut other = pose.clone();
+    other.local_rotations[7] = UnitQuat::identity();
+    let (mut end, mut want) = (Vec::new(), Vec::new());
+    let (mut a, mut b) = (BodyFrame::default(), BodyFrame::default());
+    for (k, p) in [&pose, &pose, &pose, &other, &other, &pose]
+        .into_iter()
+        .enumerate()
+    {
+        let mut p = p.clone();
+        p.time = k as Real / 30.0;
+        body.shape_next(&p, &mut end);
+        fresh.shape_at(&p, &mut want);
+        assert_eq!(end, want, "frame {k}");
+        body.pose(&p, &mut a);
+        fresh.pose(&p, &mut b);
+        assert_eq!(a.positions, b.positions, "frame {k}");
+        assert_eq!(a.velocities, b.velocities, "frame {k}");
+    }
+    assert_eq!(body.corrections(), fresh.corrections());
+}

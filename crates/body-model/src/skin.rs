@@ -105,7 +105,8 @@ pub struct SkinnedBody {
     /// Poses the press ran on.
     pub pressed_poses: usize,
     last: Option<(Real, Vec<Vec3>)>,
-    /// The shape `shape_next` made, with its pose and what the press did there, for `pose`.
+    /// The shape `shape_next` made, with its pose and what the press did there: `pose` and
+    /// `shape_next` reuse it for any pose with the same joints.
     next: Option<(Pose, Vec<Vec3>, Option<Pressed>)>,
 }
 
@@ -171,10 +172,10 @@ impl SkinnedBody {
 impl BodyModel for SkinnedBody {
     fn pose(&mut self, pose: &Pose, out: &mut BodyFrame) {
         out.time = pose.time;
-        let pressed = match self.next.take() {
-            Some((p, x, r)) if same_joints(&p, pose) => {
-                out.positions.clone_from(&x);
-                r
+        let pressed = match &self.next {
+            Some((p, x, r)) if same_joints(p, pose) => {
+                out.positions.clone_from(x);
+                *r
             }
             _ => self.shape_pressed(pose, &mut out.positions),
         };
@@ -203,7 +204,15 @@ impl BodyModel for SkinnedBody {
         self.shape_pressed(pose, out);
     }
     fn shape_next(&mut self, pose: &Pose, out: &mut Vec<Vec3>) {
-        let r = self.shape_pressed(pose, out);
+        // A body holding still (a settle, a still clip, a drape) is not skinned and pressed
+        // again: the last shape is the shape.
+        let r = match &self.next {
+            Some((p, x, r)) if same_joints(p, pose) => {
+                out.clone_from(x);
+                *r
+            }
+            _ => self.shape_pressed(pose, out),
+        };
         let mut kept = self.next.take().map(|(_, x, _)| x).unwrap_or_default();
         kept.clone_from(out);
         self.next = Some((pose.clone(), kept, r));

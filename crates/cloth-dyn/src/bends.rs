@@ -45,6 +45,7 @@ impl ClothModel {
             s.k_compress[k] *= c.stiffness_scale;
             s.damping[k] *= c.stiffness_scale;
             self.spring_scale[k] *= c.stiffness_scale;
+            self.changed_bends.push((k, c.stiffness_scale));
             changed += 1;
         }
         if changed > 0 {

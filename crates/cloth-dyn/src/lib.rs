@@ -29,7 +29,7 @@ pub use model::{BuildClothError, ClothModel, Handle, SpringKind, SpringSet};
 pub use params::ClothParams;
 pub use solver::ClothSim;
 pub use vbd::{VbdParams, VbdSim};
-pub use xpbd::{XpbdParams, XpbdSim};
+pub use xpbd::{XpbdBending, XpbdParams, XpbdSim};
 
 #[cfg(test)]
 mod solver_tests;

@@ -142,6 +142,9 @@ pub struct ClothModel {
     /// Per spring, its garment's stiffness as a multiple of the parameters' (the solvers that
     /// take stiffness from their own settings, VBD and XPBD, scale by it).
     pub spring_scale: Vec<Real>,
+    /// The bend springs changed after building ([`ClothModel::change_bends`], P3's folds): each
+    /// spring's index and the stiffness scale it was given.
+    pub changed_bends: Vec<(usize, Real)>,
 }
 
 impl ClothModel {
@@ -268,6 +271,7 @@ impl ClothModel {
             garment: vec![0; n],
             layer: vec![0; n],
             spring_scale: vec![1.0; springs.len()],
+            changed_bends: Vec::new(),
             hinges,
             long_range_springs,
             limit_springs: crate::strain::limit_springs(&springs, 0..shear.end, &inv_mass),

@@ -68,6 +68,19 @@ pub struct FoldParams {
     pub bend_shorten: Real,
     /// Their stiffness, as a multiple of the other bend springs'.
     pub bend_stiffen: Real,
+    /// Which bend springs are changed.
+    pub hold: Hold,
+}
+
+/// Which bend springs a fold changes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Hold {
+    /// P3's rule: the springs crossing the drawn line (those spanning an edge of the ridge).
+    #[default]
+    Line,
+    /// Every spring spanning an edge of the smoothed fold (both ends of the edge in the smoothed
+    /// region), so the fold's whole cross-section is held, not only its crest.
+    Fold,
 }
 
 impl Default for FoldParams {
@@ -79,6 +92,7 @@ impl Default for FoldParams {
             snap: 0.05,
             bend_shorten: 0.9,
             bend_stiffen: 10.0,
+            hold: Hold::Line,
         }
     }
 }
@@ -256,17 +270,27 @@ pub fn build(mesh: &PolyMesh, lines: &[FoldLine], p: &FoldParams) -> Result<Fold
     Ok(out)
 }
 
-/// The bend springs crossing each fold's line (those spanning an edge of its ridge), with
-/// `p`'s changes.
+/// The bend springs `p.hold` names (those crossing each fold's line, or spanning any edge of the
+/// smoothed fold), with `p`'s changes.
 pub fn bend_edits(folded: &Folded, p: &FoldParams) -> Vec<BendEdit> {
     let key = |u: u32, v: u32| (u.min(v), u.max(v));
-    // The vertices opposite each ridge edge, from one pass over the triangles.
-    let mut opposite: std::collections::HashMap<(u32, u32), Vec<u32>> = folded
-        .folds
-        .iter()
-        .flat_map(|f| f.ridge.windows(2).map(|w| (key(w[0], w[1]), Vec::new())))
-        .collect();
     let (tris, _) = folded.mesh.triangulate();
+    // The vertices opposite each held edge, from one pass over the triangles.
+    let mut opposite: std::collections::HashMap<(u32, u32), Vec<u32>> = match p.hold {
+        Hold::Line => folded
+            .folds
+            .iter()
+            .flat_map(|f| f.ridge.windows(2).map(|w| (key(w[0], w[1]), Vec::new())))
+            .collect(),
+        Hold::Fold => {
+            let inside = |v: u32| folded.region.get(v as usize).copied().unwrap_or(false);
+            tris.iter()
+                .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
+                .filter(|&(a, b)| inside(a) && inside(b))
+                .map(|(a, b)| (key(a, b), Vec::new()))
+                .collect()
+        }
+    };
     for t in &tris {
         for k in 0..3 {
             if let Some(o) = opposite.get_mut(&key(t[k], t[(k + 1) % 3])) {

@@ -182,6 +182,41 @@ fn only_bend_springs_across_the_line_change() {
 }
 
 #[test]
+fn holding_the_fold_changes_the_springs_across_its_smoothed_region() {
+    let line = FoldParams::default();
+    let whole = FoldParams {
+        hold: Hold::Fold,
+        ..FoldParams::default()
+    };
+    let f = build(&sheet(), &[across()], &line).unwrap();
+    let crossing = bend_edits(&f, &line);
+    let held = bend_edits(&f, &whole);
+    // Every spring across the line is among them, and many more beside it.
+    for e in &crossing {
+        assert!(
+            held.iter().any(|h| (h.a, h.b) == (e.a, e.b)),
+            "{e:?} left out"
+        );
+    }
+    assert!(
+        held.len() > 3 * crossing.len(),
+        "{} vs {}",
+        held.len(),
+        crossing.len()
+    );
+    // None reaches past the smoothed region: both ends within one edge of it (a bend spring
+    // joins the two vertices opposite an edge whose ends are in the region).
+    let ring = ring_of(&f.mesh);
+    let near =
+        |v: u32| f.region[v as usize] || ring[v as usize].iter().any(|&u| f.region[u as usize]);
+    for e in &held {
+        assert!(near(e.a) && near(e.b), "{e:?} outside the fold");
+    }
+    let outside = f.region.iter().filter(|r| !**r).count();
+    assert!(outside > 100, "the region is the whole sheet");
+}
+
+#[test]
 fn bad_lines_are_errors_naming_the_fold() {
     let p = FoldParams::default();
     let m = sheet();

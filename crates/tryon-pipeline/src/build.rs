@@ -5,7 +5,7 @@ use crate::real;
 use crate::scene::BroadPhaseName;
 use crate::scene::{
     BodySection, CollisionMethod, EffectsSection, GarmentSection, IntegratorName, MannequinBody,
-    MaterialName, MotionSection, ObjectBody, Scene, SolverName,
+    MaterialName, MotionSection, ObjectBody, Scene, SolverName, XpbdBendingName,
 };
 use body_collide::{
     BodyError, DepthMapCollider, ExactCollider, NearestVertexCollider, SdfCollider,
@@ -16,7 +16,7 @@ use cloth_dyn::self_contact::broad::BroadPhase;
 use cloth_dyn::wear::GarmentWear;
 use cloth_dyn::{
     BuildClothError, ClothModel, ClothParams, ClothSim, Handle, IntegratorKind, VbdParams, VbdSim,
-    XpbdParams, XpbdSim, presets,
+    XpbdBending, XpbdParams, XpbdSim, presets,
 };
 use garment_fit::{DressParams, PatternError, SkirtParams};
 use mocap_retarget::{ArmRaise, ClipError, Walk, WalkParams};
@@ -386,6 +386,10 @@ pub fn solver(
                 stretch_compliance: c.stretch_compliance,
                 bend_compliance: c.bend_compliance,
                 static_friction: c.static_friction,
+                bending: match c.xpbd_bending {
+                    XpbdBendingName::Dihedral => XpbdBending::Dihedral,
+                    XpbdBendingName::Springs => XpbdBending::Springs,
+                },
             };
             Box::new(XpbdSim::new(model, p, x))
         }

@@ -21,6 +21,7 @@ pub use schema::{
 };
 pub use sections::{
     BroadPhaseName, ClothSection, CollisionMethod, EffectsSection, OutputSection, SolverName,
+    XpbdBendingName,
 };
 
 /// Why a scene file was rejected.

@@ -9,6 +9,7 @@
 //! pulls toward the rest shape's angles, so a modelled garment keeps its shape.
 
 pub mod constraints;
+pub mod springs;
 
 use crate::model::{ClothModel, Handle};
 use crate::params::ClothParams;
@@ -36,6 +37,18 @@ pub struct XpbdParams {
     /// Static friction: a contact sticks while its tangential slip is under this times its
     /// normal correction.
     pub static_friction: Real,
+    /// What bends the cloth: dihedral angles toward the rest shape's, or the model's bend springs.
+    pub bending: XpbdBending,
+}
+
+/// How the XPBD solver bends the cloth.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum XpbdBending {
+    /// A dihedral-angle constraint on every interior edge (compliance `bend_compliance`).
+    #[default]
+    Dihedral,
+    /// The model's bend springs (P3's and Provot's), each at its own stiffness ([`springs`]).
+    Springs,
 }
 
 impl Default for XpbdParams {
@@ -46,6 +59,7 @@ impl Default for XpbdParams {
             stretch_compliance: 0.0,
             bend_compliance: 1.0,
             static_friction: 0.6,
+            bending: XpbdBending::Dihedral,
         }
     }
 }
@@ -61,12 +75,35 @@ pub struct XpbdSim {
     edge_colours: Vec<Range<usize>>,
     hinges: Vec<Hinge>,
     hinge_colours: Vec<Range<usize>>,
+    bend_springs: Vec<springs::BendSpring>,
     prev: Vec<Vec3>,
     backup: (Vec<Vec3>, Vec<Vec3>),
     elastic: Vec<Vec3>,
     contacts: Vec<Contact>,
     tethers: Tethers,
     tethers_stale: bool,
+}
+
+/// The moves of a hinge's four particles (at `p`, inverse masses `w`) that satisfy its angle
+/// constraint with compliance `alpha` (already over the step squared); none for a degenerate one.
+fn hinge_move(p: [Vec3; 4], w: [Real; 4], hg: &Hinge, alpha: Real) -> [Vec3; 4] {
+    let zero = [Vec3::zeros(); 4];
+    let Some((angle, grad)) = dihedral(p) else {
+        return zero;
+    };
+    let mut c = angle - hg.rest_angle;
+    if c > std::f64::consts::PI {
+        c -= 2.0 * std::f64::consts::PI;
+    } else if c < -std::f64::consts::PI {
+        c += 2.0 * std::f64::consts::PI;
+    }
+    let denom: Real = (0..4).map(|k| w[k] * grad[k].norm_squared()).sum();
+    let a = alpha * hg.compliance_scale;
+    if !(denom + a > 1e-20) {
+        return zero;
+    }
+    let dl = -c / (denom + a);
+    [0, 1, 2, 3].map(|k| grad[k] * (w[k] * dl))
 }
 
 /// The unique edges of `triangles` and the interior edges' hinges (the two triangles' opposite
@@ -95,7 +132,17 @@ impl XpbdSim {
     /// A solver of `model` with `params` (environment, friction, rest scale) and `xpbd`.
     pub fn new(model: ClothModel, params: ClothParams, xpbd: XpbdParams) -> Self {
         let x = &model.rest_positions;
-        let (edge_list, hinge_list) = edges_and_hinges(&model.triangles);
+        let (edge_list, all_hinges) = edges_and_hinges(&model.triangles);
+        let (hinge_list, bend_springs) = match xpbd.bending {
+            XpbdBending::Dihedral => (
+                springs::scaled_hinges(&model, &all_hinges, false),
+                Vec::new(),
+            ),
+            XpbdBending::Springs => (
+                springs::scaled_hinges(&model, &all_hinges, true),
+                springs::bend_springs(&model).0,
+            ),
+        };
         let refs: Vec<&[u32]> = edge_list.iter().map(|e| &e[..]).collect();
         let (order, edge_colours) = colour(&refs, x.len());
         let edges = order
@@ -106,15 +153,19 @@ impl XpbdSim {
                 Edge { i, j, rest }
             })
             .collect();
-        let refs: Vec<&[u32]> = hinge_list.iter().map(|h| &h[..]).collect();
+        let refs: Vec<&[u32]> = hinge_list.iter().map(|h| &h.0[..]).collect();
         let (order, hinge_colours) = colour(&refs, x.len());
         let hinges = order
             .iter()
             .map(|&k| {
-                let v = hinge_list[k as usize];
+                let (v, compliance_scale) = hinge_list[k as usize];
                 let p = v.map(|i| x[i as usize]);
                 let rest_angle = dihedral(p).map_or(0.0, |d| d.0);
-                Hinge { v, rest_angle }
+                Hinge {
+                    v,
+                    rest_angle,
+                    compliance_scale,
+                }
             })
             .collect();
         let n = x.len();
@@ -127,6 +178,7 @@ impl XpbdSim {
             edge_colours,
             hinges,
             hinge_colours,
+            bend_springs,
             prev: z.clone(),
             backup: (z.clone(), z.clone()),
             elastic: z,
@@ -200,22 +252,9 @@ impl XpbdSim {
         for r in &self.hinge_colours {
             for hg in &self.hinges[r.clone()] {
                 let v = hg.v.map(|k| k as usize);
-                let Some((angle, grad)) = dihedral(v.map(|k| x[k])) else {
-                    continue;
-                };
-                let mut c = angle - hg.rest_angle;
-                if c > std::f64::consts::PI {
-                    c -= 2.0 * std::f64::consts::PI;
-                } else if c < -std::f64::consts::PI {
-                    c += 2.0 * std::f64::consts::PI;
-                }
-                let denom: Real = (0..4).map(|k| w[v[k]] * grad[k].norm_squared()).sum();
-                if !(denom + alpha > 1e-20) {
-                    continue;
-                }
-                let dl = -c / (denom + alpha);
+                let m = hinge_move(v.map(|k| x[k]), v.map(|k| w[k]), hg, alpha);
                 for k in 0..4 {
-                    x[v[k]] += grad[k] * (w[v[k]] * dl);
+                    x[v[k]] += m[k];
                 }
             }
         }
@@ -270,6 +309,7 @@ impl XpbdSim {
             }
             self.solve_edges(&mut x, h, last && pass + 1 == passes);
             self.solve_hinges(&mut x, h);
+            springs::solve(&self.bend_springs, &self.model.inv_mass, &mut x, h);
         }
         self.contacts.clear();
         collider.resolve(&mut x, &mut self.contacts);
@@ -290,7 +330,7 @@ impl XpbdSim {
 
 impl ClothSolver for XpbdSim {
     fn info(&self) -> ClothInfo {
-        let elements = self.edges.len() + self.hinges.len();
+        let elements = self.edges.len() + self.hinges.len() + self.bend_springs.len();
         self.model.info("xpbd", self.xpbd.substep, elements)
     }
 
@@ -330,6 +370,10 @@ impl ClothSolver for XpbdSim {
         if self.model.take_handle(handle) {
             self.tethers_stale = true;
         }
+    }
+
+    fn boxed_clone(&self) -> Option<Box<dyn ClothSolver>> {
+        Some(Box::new(self.clone()))
     }
 }
 

@@ -68,10 +68,9 @@ fn an_inextensible_sheet_hangs_finite_and_unstretched_even_at_the_frames_step() 
     }
 }
 
-#[test]
-fn a_folded_rest_shape_stays_folded_without_gravity() {
-    // Two squares meeting at a right angle along x = 0.
-    let mesh = PolyMesh {
+/// Two squares meeting at a right angle along x = 0 (the crease is the edge 0-1).
+fn right_angle() -> PolyMesh {
+    PolyMesh {
         positions: vec![
             Vec3::new(0.0, 0.0, 0.0),
             Vec3::new(0.0, 0.0, 1.0),
@@ -81,7 +80,37 @@ fn a_folded_rest_shape_stays_folded_without_gravity() {
             Vec3::new(0.0, 1.0, 1.0),
         ],
         faces: vec![Face::Quad([0, 1, 3, 2]), Face::Quad([0, 4, 5, 1])],
+    }
+}
+
+/// [`right_angle`]'s positions after its upper wing is knocked outward and 90 frames pass
+/// without gravity.
+fn knocked_positions(s: &mut XpbdSim) -> Vec<Vec3> {
+    let mut f = s.initial_frame();
+    for i in [4, 5] {
+        f.velocities[i] = Vec3::new(-0.3, 0.0, 0.0);
+    }
+    for _ in 0..90 {
+        s.step_frame(&mut f, 1.0 / 30.0, &mut NoCollider);
+    }
+    f.positions
+}
+
+/// The angle between the wings of [`right_angle`] after the knock (degrees; 90 at rest).
+fn knocked(s: &mut XpbdSim) -> Real {
+    let f = CoarseFrame {
+        positions: knocked_positions(s),
+        ..CoarseFrame::default()
     };
+    let (a, b) = (
+        f.positions[4] - f.positions[0],
+        f.positions[2] - f.positions[0],
+    );
+    a.angle(&b).to_degrees()
+}
+
+#[test]
+fn a_folded_rest_shape_stays_folded_without_gravity() {
     let params = ClothParams {
         gravity: Vec3::zeros(),
         ..ClothParams::default()
@@ -90,24 +119,84 @@ fn a_folded_rest_shape_stays_folded_without_gravity() {
         bend_compliance: 1e-4,
         ..XpbdParams::default()
     };
-    let mut s = sim(&mesh, params, xpbd, vec![]);
-    let mut f = s.initial_frame();
-    // Knock it: the wing moves outward.
-    for i in [4, 5] {
-        f.velocities[i] = Vec3::new(-0.3, 0.0, 0.0);
-    }
-    for _ in 0..90 {
-        s.step_frame(&mut f, 1.0 / 30.0, &mut NoCollider);
-    }
-    let (a, b) = (
-        f.positions[4] - f.positions[0],
-        f.positions[2] - f.positions[0],
-    );
-    let angle = a.angle(&b).to_degrees();
+    let mut s = sim(&right_angle(), params, xpbd, vec![]);
+    let angle = knocked(&mut s);
     assert!(
         (angle - 90.0).abs() < 5.0,
         "the fold opened to {angle} degrees"
     );
+}
+
+#[test]
+fn under_spring_bending_a_changed_bend_spring_holds_its_fold_by_the_angle() {
+    // Soft bend springs (P3's, far softer than the dihedral default): the knocked wing turns
+    // about the crease. The same cloth with the springs across the crease changed (as a fold's
+    // are) keeps the crease's angle, held by its hinge at the changed springs' stiffness.
+    let params = ClothParams {
+        gravity: Vec3::zeros(),
+        k_bend: 1e-3,
+        ..ClothParams::default()
+    };
+    let xpbd = XpbdParams {
+        bending: XpbdBending::Springs,
+        bend_compliance: 1e-3,
+        ..XpbdParams::default()
+    };
+    let mesh = right_angle();
+    let model = ClothModel::build(&mesh, &params, vec![]).unwrap();
+    let plain = XpbdSim::new(model.clone(), params.clone(), xpbd.clone());
+    assert!(!plain.bend_springs.is_empty() && plain.hinges.is_empty());
+    // The springs across the crease: those whose ends lie on both wings.
+    let across: Vec<crate::bends::BendChange> = model
+        .bend
+        .clone()
+        .filter_map(|k| {
+            let (i, j) = (model.springs.i[k], model.springs.j[k]);
+            let wing = |v: u32| mesh.positions[v as usize].y > 0.5;
+            (wing(i) != wing(j) && ![0, 1].contains(&i) && ![0, 1].contains(&j)).then_some(
+                crate::bends::BendChange {
+                    a: i,
+                    b: j,
+                    rest_scale: 1.0,
+                    stiffness_scale: 10.0,
+                },
+            )
+        })
+        .collect();
+    let mut changed = model.clone();
+    assert!(
+        changed.change_bends(&across) > 0,
+        "no spring across the crease"
+    );
+    let mut held = XpbdSim::new(changed, params, xpbd);
+    assert!(
+        !held.hinges.is_empty(),
+        "the changed springs became no hinges"
+    );
+    assert!(
+        held.hinges
+            .iter()
+            .all(|h| (h.compliance_scale - 0.1).abs() < 1e-12)
+    );
+    assert_eq!(
+        held.bend_springs.len() + across.len(),
+        plain.bend_springs.len()
+    );
+    // The crease's own angle: kept where the springs across it were changed, lost where not.
+    let crease = held.hinges[0];
+    let turned = |x: &[Vec3]| {
+        let a = constraints::dihedral(crease.v.map(|k| x[k as usize]))
+            .unwrap()
+            .0;
+        (a - crease.rest_angle).abs().to_degrees()
+    };
+    let open = turned(&knocked_positions(&mut plain.clone()));
+    assert!(
+        open > 20.0,
+        "soft springs held the crease: turned {open} degrees"
+    );
+    let kept = turned(&knocked_positions(&mut held));
+    assert!(kept < 2.0, "the held crease turned {kept} degrees");
 }
 
 #[test]

@@ -52,6 +52,17 @@ pub enum SmoothName {
     Constrained,
 }
 
+/// Which bend springs a fold shortens and stiffens.
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, JsonSchema, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum HoldName {
+    /// P3's rule: the springs crossing the drawn line.
+    #[default]
+    Line,
+    /// Every spring spanning an edge of the smoothed fold.
+    Fold,
+}
+
 /// How the `[[fold]]` lines are shaped and held (P3 3.4-3.5).
 #[derive(Clone, Debug, Deserialize, Serialize, JsonSchema, PartialEq)]
 #[serde(deny_unknown_fields, default)]
@@ -73,6 +84,10 @@ pub struct FoldingSection {
     /// Stiffness of the bend springs crossing a line, as a multiple of the others'.
     #[schemars(range(min = 1.0, max = 1000.0))]
     pub bend_stiffen: Real,
+    /// Which bend springs are shortened and stiffened: `line` (P3's rule: those crossing the
+    /// drawn line) or `fold` (every one spanning an edge of the smoothed fold, so its whole
+    /// cross-section is held).
+    pub hold: HoldName,
     /// Seconds the garment hangs on the body, held in the motion's first pose, before the folds
     /// are drawn on it (P3 draws on a garment at rest; a fold drawn on the garment as placed is
     /// pushed about while it settles). The garment's cut is kept: the fold is carried onto its
@@ -99,6 +114,7 @@ impl Default for FoldingSection {
             snap: p.snap,
             bend_shorten: p.bend_shorten,
             bend_stiffen: p.bend_stiffen,
+            hold: HoldName::Line,
             drape: 1.0,
         }
     }
@@ -121,6 +137,10 @@ impl FoldingSection {
             snap: self.snap,
             bend_shorten: self.bend_shorten,
             bend_stiffen: self.bend_stiffen,
+            hold: match self.hold {
+                HoldName::Line => fold::Hold::Line,
+                HoldName::Fold => fold::Hold::Fold,
+            },
         }
     }
 }

@@ -70,6 +70,10 @@ pub struct ClothSection {
     /// `effects.friction`).
     #[schemars(range(min = 0.0, max = 5.0))]
     pub static_friction: Real,
+    /// What bends the cloth in the `xpbd` solver: `dihedral` (angles toward the rest shape's, at
+    /// `bend_compliance`) or `springs` (the model's bend springs, P3's, each at its own stiffness
+    /// `k_bend`, changed where folds are drawn).
+    pub xpbd_bending: XpbdBendingName,
     /// The `vbd` solver's longest step (s).
     #[schemars(range(min = 1e-5, max = 0.1))]
     pub vbd_substep: Real,
@@ -149,6 +153,7 @@ impl Default for ClothSection {
             stretch_compliance: xpbd.stretch_compliance,
             bend_compliance: xpbd.bend_compliance,
             static_friction: xpbd.static_friction,
+            xpbd_bending: XpbdBendingName::default(),
             vbd_substep: vbd.substep,
             vbd_iterations: vbd.iterations,
             vbd_stretch: vbd.stretch,
@@ -179,6 +184,17 @@ pub enum SolverName {
     /// Vertex block descent (cloth-dyn's `VbdSim`): the implicit step's energy (inertia, springs,
     /// body contact with friction) minimised vertex by vertex, colour by colour.
     Vbd,
+}
+
+/// What bends the cloth in the `xpbd` solver.
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, JsonSchema, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum XpbdBendingName {
+    /// A dihedral-angle constraint on every interior edge, toward the rest shape's angle.
+    #[default]
+    Dihedral,
+    /// The model's bend springs (P3's and Provot's), as compliant distance constraints.
+    Springs,
 }
 
 /// A way of colliding with the body. Adding one: a variant here and its arm in
