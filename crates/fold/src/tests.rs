@@ -42,7 +42,14 @@ fn edges(mesh: &PolyMesh) -> std::collections::HashSet<(u32, u32)> {
 
 fn height_of(f: &Folded, k: usize) -> Real {
     let (tris, _) = f.mesh.triangulate();
-    fold_height(&f.mesh.positions, &tris, &f.folds[k].ridge, 4).expect("a measurable fold")
+    fold_height(
+        &f.mesh.positions,
+        &tris,
+        &f.folds[k].ridge,
+        4,
+        f.folds[k].drawn,
+    )
+    .expect("a measurable fold")
 }
 
 #[test]
@@ -214,6 +221,47 @@ fn holding_the_fold_changes_the_springs_across_its_smoothed_region() {
     }
     let outside = f.region.iter().filter(|r| !**r).count();
     assert!(outside > 100, "the region is the whole sheet");
+}
+
+#[test]
+fn a_fold_amid_cloth_rougher_than_it_or_far_coarser_is_not_measured() {
+    let f = build(&sheet(), &[across()], &FoldParams::default()).unwrap();
+    let (tris, _) = f.mesh.triangulate();
+    let ridge = &f.folds[0].ridge;
+    let drawn = f.folds[0].drawn;
+    let on = |x: &[Vec3]| fold_height(x, &tris, ridge, 4, drawn);
+    assert!(on(&f.mesh.positions).is_some());
+    // The cloth around the fold bumped up and down by up to `a` (deterministic noise).
+    let bumped = |a: Real| {
+        let mut r = 12345u64;
+        let mut x = f.mesh.positions.clone();
+        for (p, inside) in x.iter_mut().zip(&f.region) {
+            r = r
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            if !inside {
+                p.y += a * ((r >> 33) as Real / (1u64 << 31) as Real * 2.0 - 1.0);
+            }
+        }
+        x
+    };
+    // Bumps of a tenth of the fold's height leave it measurable, and measured near its height;
+    // bumps as tall as the fold make it not measurable.
+    let h = on(&bumped(0.1 * drawn)).expect("a fold amid small bumps is measured");
+    let clean = on(&f.mesh.positions).unwrap();
+    assert!((h - clean).abs() < 0.15 * drawn, "{h} vs {clean}");
+    assert_eq!(on(&bumped(drawn)), None);
+    // A fold low beside the cells it is drawn on (2 cm on 5 cm cells): its surroundings lie
+    // about ten heights out, another part of the garment, and it is not measured.
+    let mut low = across();
+    low.height = 0.02;
+    let f = build(&sheet(), &[low], &FoldParams::default()).unwrap();
+    let (tris, _) = f.mesh.triangulate();
+    let g = &f.folds[0];
+    assert_eq!(
+        fold_height(&f.mesh.positions, &tris, &g.ridge, 4, g.drawn),
+        None
+    );
 }
 
 #[test]

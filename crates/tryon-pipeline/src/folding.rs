@@ -32,7 +32,7 @@ impl Folds {
         self.folds
             .iter()
             .map(|f| {
-                fold::fold_height(x, triangles, &f.ridge, self.reach)
+                fold::fold_height(x, triangles, &f.ridge, self.reach, f.drawn)
                     .map_or(Real::NAN, |h| fold::fold_retention(h, f.drawn))
             })
             .collect()
@@ -81,7 +81,7 @@ pub(crate) fn apply(
     let shaped = folded
         .folds
         .iter()
-        .map(|f| fold::fold_height(&folded.mesh.positions, &tris, &f.ridge, reach))
+        .map(|f| fold::fold_height(&folded.mesh.positions, &tris, &f.ridge, reach, f.drawn))
         .collect();
     let n = folded.mesh.positions.len() as u32;
     if let Some(w) = dressed.wear.first_mut() {
