@@ -82,9 +82,14 @@ fn with_fold(fold: &str) -> String {
 }
 
 fn with_folding(folding: &str, fold: &str) -> String {
+    with_folding_on(12, folding, fold)
+}
+
+/// The square of `n` x `n` particles on the sphere, with `folding` and `fold`.
+fn with_folding_on(n: usize, folding: &str, fold: &str) -> String {
     format!(
         "[scene]\nname = \"f\"\nduration = 0.1\n[body]\nkind = \"sphere\"\n[garment]\nkind = \"square\"\n\
-         particles = 12\n[motion]\nkind = \"still\"\n{folding}{fold}"
+         particles = {n}\n[motion]\nkind = \"still\"\n{folding}{fold}"
     )
 }
 
@@ -129,7 +134,10 @@ fn bad_fold_lines_are_errors_naming_the_fold_and_what_is_wrong() {
 /// ways are errors naming the fold.
 #[test]
 fn a_line_drawn_on_the_canvas_becomes_a_fold_and_bad_pixels_are_named() {
-    let plain = Scene::parse(&with_fold(""), std::path::Path::new("f.toml")).unwrap();
+    // A square of 32 x 32 (cells of about 5 cm): on the 12 x 12 one a fold is not measurable
+    // (its surroundings lie more than six heights out).
+    let fine = |fold: &str| with_folding_on(32, "[folding]\ndrape = 0.0\n", fold);
+    let plain = Scene::parse(&fine(""), std::path::Path::new("f.toml")).unwrap();
     let (canvas, image) = tryon_pipeline::canvas::picture(&plain).unwrap();
     let (w, h) = (canvas.width as usize, canvas.height as usize);
     // The garment's pixels: its colour's hue (blue), unlike the body and the grey background.
@@ -147,8 +155,8 @@ fn a_line_drawn_on_the_canvas_becomes_a_fold_and_bad_pixels_are_named() {
     let (x0, x1) = (row[0], row[row.len() - 1]);
     let (a, b) = (x0 + (x1 - x0) / 4, x1 - (x1 - x0) / 4);
     assert!(blue(a, y) && blue(b, y));
-    let line = format!("[[fold]]\nheight = 0.02\nscreen = [[{a}, {y}], [{b}, {y}]]\n");
-    let p = assemble(&with_fold(&line)).unwrap();
+    let line = format!("[[fold]]\nheight = 0.06\nscreen = [[{a}, {y}], [{b}, {y}]]\n");
+    let p = assemble(&fine(&line)).unwrap();
     assert_eq!(p.folds.folds.len(), 1);
     let shaped = p.folds.shaped[0].expect("measured");
     assert!(shaped > 0.01, "the fold stands {shaped} m");
