@@ -94,11 +94,11 @@ pub fn scaled_hinges(
 ) -> Vec<([u32; 4], Real)> {
     let s = &model.springs;
     let key = |a: u32, b: u32| (a.min(b), a.max(b));
-    let scale: std::collections::HashMap<(u32, u32), Real> = model
-        .changed_bends
-        .iter()
-        .map(|&(k, f)| (key(s.i[k], s.j[k]), f))
-        .collect();
+    // A spring changed more than once has the product of its scales, as its stiffness does.
+    let mut scale: std::collections::HashMap<(u32, u32), Real> = Default::default();
+    for &(k, f) in &model.changed_bends {
+        *scale.entry(key(s.i[k], s.j[k])).or_insert(1.0) *= f;
+    }
     hinges
         .iter()
         .filter_map(|h| match scale.get(&key(h[2], h[3])) {

@@ -168,6 +168,17 @@ fn under_spring_bending_a_changed_bend_spring_holds_its_fold_by_the_angle() {
         changed.change_bends(&across) > 0,
         "no spring across the crease"
     );
+    // Changed twice, a spring's hinge takes both scales, as the spring's stiffness does.
+    let mut twice = changed.clone();
+    twice.change_bends(&across);
+    let again = XpbdSim::new(twice, params.clone(), xpbd.clone());
+    assert!(!again.hinges.is_empty());
+    assert!(
+        again
+            .hinges
+            .iter()
+            .all(|h| (h.compliance_scale - 0.01).abs() < 1e-12)
+    );
     let mut held = XpbdSim::new(changed, params, xpbd);
     assert!(
         !held.hinges.is_empty(),
