@@ -52,6 +52,28 @@ pub fn dihedral(p: [Vec3; 4]) -> Option<(Real, [Vec3; 4])> {
     Some((angle, [-ga, -gb, -gc, -gd]))
 }
 
+/// The moves of a hinge's four particles (at `p`, inverse masses `w`) that satisfy its angle
+/// constraint with compliance `alpha` (already over the step squared); none for a degenerate one.
+pub fn hinge_move(p: [Vec3; 4], w: [Real; 4], hg: &Hinge, alpha: Real) -> [Vec3; 4] {
+    let zero = [Vec3::zeros(); 4];
+    let Some((angle, grad)) = dihedral(p) else {
+        return zero;
+    };
+    let mut c = angle - hg.rest_angle;
+    if c > std::f64::consts::PI {
+        c -= 2.0 * std::f64::consts::PI;
+    } else if c < -std::f64::consts::PI {
+        c += 2.0 * std::f64::consts::PI;
+    }
+    let denom: Real = (0..4).map(|k| w[k] * grad[k].norm_squared()).sum();
+    let a = alpha * hg.compliance_scale;
+    if !(denom + a > 1e-20) {
+        return zero;
+    }
+    let dl = -c / (denom + a);
+    [0, 1, 2, 3].map(|k| grad[k] * (w[k] * dl))
+}
+
 /// `atan2(y, x)` to about 3e-9 rad, without a library call (the dihedral constraints take most of
 /// an XPBD substep, and libm's atan2 was a third of them): the ratio is reduced to [0, 1] by
 /// symmetry, to [0, tan(pi/12)] by atan(t) = pi/6 + atan((t sqrt3 - 1) / (t + sqrt3)), and there

@@ -9,13 +9,16 @@
 //! pulls toward the rest shape's angles, so a modelled garment keeps its shape.
 
 pub mod constraints;
+pub mod lanes;
 pub mod springs;
 
 use crate::model::{ClothModel, Handle};
 use crate::params::ClothParams;
 use crate::retry::frame_with_retries;
 use crate::strain::Tethers;
+pub use constraints::hinge_move;
 use constraints::{Edge, Hinge, colour, dihedral};
+use lanes::{EdgeBatch, HingeBatch, edge_batches, hinge_batches, solve_edge_batch, solve_hinge_batch};
 use std::collections::HashMap;
 use std::ops::Range;
 use tryon_core::frames::{CoarseFrame, Contact, StepReport};
@@ -75,6 +78,9 @@ pub struct XpbdSim {
     edge_colours: Vec<Range<usize>>,
     hinges: Vec<Hinge>,
     hinge_colours: Vec<Range<usize>>,
+    /// The same constraints eight at a time, colour by colour ([`lanes`]).
+    edge_lanes: Vec<EdgeBatch>,
+    hinge_lanes: Vec<HingeBatch>,
     bend_springs: Vec<springs::BendSpring>,
     prev: Vec<Vec3>,
     backup: (Vec<Vec3>, Vec<Vec3>),
@@ -82,28 +88,6 @@ pub struct XpbdSim {
     contacts: Vec<Contact>,
     tethers: Tethers,
     tethers_stale: bool,
-}
-
-/// The moves of a hinge's four particles (at `p`, inverse masses `w`) that satisfy its angle
-/// constraint with compliance `alpha` (already over the step squared); none for a degenerate one.
-fn hinge_move(p: [Vec3; 4], w: [Real; 4], hg: &Hinge, alpha: Real) -> [Vec3; 4] {
-    let zero = [Vec3::zeros(); 4];
-    let Some((angle, grad)) = dihedral(p) else {
-        return zero;
-    };
-    let mut c = angle - hg.rest_angle;
-    if c > std::f64::consts::PI {
-        c -= 2.0 * std::f64::consts::PI;
-    } else if c < -std::f64::consts::PI {
-        c += 2.0 * std::f64::consts::PI;
-    }
-    let denom: Real = (0..4).map(|k| w[k] * grad[k].norm_squared()).sum();
-    let a = alpha * hg.compliance_scale;
-    if !(denom + a > 1e-20) {
-        return zero;
-    }
-    let dl = -c / (denom + a);
-    [0, 1, 2, 3].map(|k| grad[k] * (w[k] * dl))
 }
 
 /// The unique edges of `triangles` and the interior edges' hinges (the two triangles' opposite
@@ -145,7 +129,7 @@ impl XpbdSim {
         };
         let refs: Vec<&[u32]> = edge_list.iter().map(|e| &e[..]).collect();
         let (order, edge_colours) = colour(&refs, x.len());
-        let edges = order
+        let edges: Vec<Edge> = order
             .iter()
             .map(|&k| {
                 let [i, j] = edge_list[k as usize];
@@ -155,7 +139,7 @@ impl XpbdSim {
             .collect();
         let refs: Vec<&[u32]> = hinge_list.iter().map(|h| &h.0[..]).collect();
         let (order, hinge_colours) = colour(&refs, x.len());
-        let hinges = order
+        let hinges: Vec<Hinge> = order
             .iter()
             .map(|&k| {
                 let (v, compliance_scale) = hinge_list[k as usize];
@@ -168,6 +152,8 @@ impl XpbdSim {
                 }
             })
             .collect();
+        let (edge_lanes, _) = edge_batches(&edges, &edge_colours);
+        let (hinge_lanes, _) = hinge_batches(&hinges, &hinge_colours);
         let n = x.len();
         let z = vec![Vec3::zeros(); n];
         XpbdSim {
@@ -178,6 +164,8 @@ impl XpbdSim {
             edge_colours,
             hinges,
             hinge_colours,
+            edge_lanes,
+            hinge_lanes,
             bend_springs,
             prev: z.clone(),
             backup: (z.clone(), z.clone()),
@@ -216,47 +204,23 @@ impl XpbdSim {
         }
     }
 
-    /// One pass over the distance constraints, colour by colour; with `record`, their forces go
-    /// into `elastic`.
+    /// One pass over the distance constraints, colour by colour, eight at a time; with `record`,
+    /// their forces go into `elastic`.
     fn solve_edges(&mut self, x: &mut [Vec3], h: Real, record: bool) {
         let w = &self.model.inv_mass;
-        let alpha = self.xpbd.stretch_compliance / (h * h);
-        for r in &self.edge_colours {
-            for e in &self.edges[r.clone()] {
-                let (i, j) = (e.i as usize, e.j as usize);
-                let wsum = w[i] + w[j];
-                let d = x[i] - x[j];
-                let len = d.norm();
-                if wsum == 0.0 || len < 1e-12 {
-                    continue;
-                }
-                let n = d / len;
-                let c = len - e.rest;
-                let a = alpha / e.rest.max(1e-9);
-                let dl = -c / (wsum + a);
-                x[i] += n * (w[i] * dl);
-                x[j] -= n * (w[j] * dl);
-                if record {
-                    let f = n * (dl / (h * h));
-                    self.elastic[i] += f;
-                    self.elastic[j] -= f;
-                }
-            }
+        let alpha = (self.xpbd.stretch_compliance / (h * h)) as f32;
+        for eb in &self.edge_lanes {
+            let elastic = record.then_some((&mut self.elastic[..], h));
+            solve_edge_batch(x, w, eb, alpha, elastic);
         }
     }
 
-    /// One pass over the dihedral constraints, colour by colour.
+    /// One pass over the dihedral constraints, colour by colour, eight at a time.
     fn solve_hinges(&mut self, x: &mut [Vec3], h: Real) {
         let w = &self.model.inv_mass;
-        let alpha = self.xpbd.bend_compliance / (h * h);
-        for r in &self.hinge_colours {
-            for hg in &self.hinges[r.clone()] {
-                let v = hg.v.map(|k| k as usize);
-                let m = hinge_move(v.map(|k| x[k]), v.map(|k| w[k]), hg, alpha);
-                for k in 0..4 {
-                    x[v[k]] += m[k];
-                }
-            }
+        let alpha = (self.xpbd.bend_compliance / (h * h)) as f32;
+        for hb in &self.hinge_lanes {
+            solve_hinge_batch(x, w, hb, alpha);
         }
     }
 

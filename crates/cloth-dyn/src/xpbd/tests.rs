@@ -299,7 +299,9 @@ proptest! {
             s.step_frame(&mut f, 1.0 / 30.0, &mut NoCollider);
         }
         let p1 = f.velocities.iter().zip(&s.model.mass).map(|(v, m)| v * *m).sum::<Vec3>();
-        prop_assert!((p1 - p0).norm() < 1e-9 * (1.0 + p0.norm()), "{p0} -> {p1}");
+        // The constraints are solved in f32 lanes: momentum is kept to f32's rounding (a wrong
+        // gradient or a one-sided move would change it by the whole correction).
+        prop_assert!((p1 - p0).norm() < 1e-6 * (1.0 + p0.norm()), "{p0} -> {p1}");
     }
 }
 
