@@ -27,6 +27,7 @@ pub mod exact;
 pub mod follow;
 pub mod grid;
 pub mod sdf;
+pub mod sdf_band;
 pub mod swept;
 pub mod tracker;
 
@@ -41,6 +42,8 @@ pub use tracker::NearestVertexCollider;
 
 #[cfg(test)]
 mod exact_tests;
+#[cfg(test)]
+mod sdf_focus_tests;
 #[cfg(test)]
 mod swept_tests;
 #[cfg(test)]

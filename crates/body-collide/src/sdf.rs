@@ -3,7 +3,7 @@
 //! P3 precomputes the field once for a rigid object. A body that moves deforms, so here the field
 //! is rebuilt from the deformed mesh at every [`Collider::update`]:
 //! 1. exact distances in a narrow band: every triangle visits the grid nodes within `band` cells of
-//!    its bounds and keeps the nearest triangle per node;
+//!    its bounds and keeps the nearest triangle per node (eight nodes at a time, [`crate::sdf_band`]);
 //! 2. signs in the band from the angle-weighted pseudo-normal of the nearest feature (face, edge or
 //!    vertex), as the exact referee does;
 //! 3. nodes beyond the band get their sign by a flood fill from the grid's border (what the fill
@@ -11,11 +11,17 @@
 //!    distance to the nearest triangle among their neighbours', propagated breadth-first from the
 //!    band, so a point deep inside still has a distance and a way out.
 //!
-//! The rebuild costs time proportional to the body's surface area over the cell size squared, times
-//! the band; a static body pays it once. Resolution is the number of cells along the body's longest
-//! side.
+//! The rebuild costs time proportional to the number of body triangles times (2 band + 1)^3 when
+//! the triangles are smaller than a cell, as a body's are; a static body pays it once. Told where
+//! the cloth is ([`Collider::focus`]), the grid covers only the cloth's bounds and
+//! [`SdfCollider::FOCUS_MARGIN`] around them, on the same nodes as the whole body's grid; a face of
+//! that grid cut through the body does not start the flood fill, so the body's inside stays
+//! inside. It is rebuilt around the cloth when the cloth comes within
+//! [`SdfCollider::FOCUS_SLACK`] of its edge. Resolution is the number of cells along the body's
+//! longest side.
 
 use crate::body::{BodyError, BodyMesh};
+use crate::sdf_band::BandGrid;
 use std::collections::VecDeque;
 use tryon_core::frames::{BodyFrame, Contact};
 use tryon_core::math::{Real, Vec3, closest_point_on_triangle};
@@ -40,6 +46,13 @@ pub struct SdfCollider {
     /// Nearest body triangle of each band node (`u32::MAX` beyond the band).
     face: Vec<u32>,
     vertex_normals: Vec<Vec3>,
+    /// The region the field covers when the cloth is known ([`Collider::focus`]), and the
+    /// cloth's last bounds.
+    region: Option<(Vec3, Vec3)>,
+    cloth: Option<(Vec3, Vec3)>,
+    /// Whether each face of the grid (axis, low/high) lies on the body's padded bounds, where
+    /// the flood fill may start; a face cut through the body by the region may not.
+    open_faces: [[bool; 2]; 3],
 }
 
 impl SdfCollider {
@@ -59,6 +72,9 @@ impl SdfCollider {
             dist: Vec::new(),
             face: Vec::new(),
             vertex_normals: Vec::new(),
+            region: None,
+            cloth: None,
+            open_faces: [[true; 2]; 3],
         };
         c.rebuild();
         Ok(c)
@@ -79,14 +95,46 @@ impl SdfCollider {
         i + self.dims[0] * (j + self.dims[1] * k)
     }
 
+    /// How far beyond the cloth's bounds the field reaches (m): farther than cloth moves in a
+    /// frame (4.5 m/s at 30 fps).
+    pub const FOCUS_MARGIN: Real = 0.15;
+    /// The cloth may come this close to the edge of the field before it is rebuilt around it.
+    pub const FOCUS_SLACK: Real = 0.05;
+
     fn rebuild(&mut self) {
         let (lo, hi) = self.body.bounds();
         let extent = (hi - lo).max().max(1e-6);
         self.cell = extent / self.resolution as Real;
         let pad = (self.band + 2) as Real * self.cell + self.thickness;
-        self.origin = lo - Vec3::repeat(pad);
-        let span = hi - lo + Vec3::repeat(2.0 * pad);
-        self.dims = [0, 1, 2].map(|a| (span[a] / self.cell).ceil() as usize + 1);
+        let (full_lo, full_hi) = (lo - Vec3::repeat(pad), hi + Vec3::repeat(pad));
+        let (mut glo, mut ghi) = (full_lo, full_hi);
+        self.open_faces = [[true; 2]; 3];
+        self.region = None;
+        if let Some((clo, chi)) = self.cloth {
+            // The cloth's surroundings only, on the full grid's nodes, where they cut the body.
+            let m = Vec3::repeat(Self::FOCUS_MARGIN.max(3.0 * self.cell));
+            let (rlo, rhi) = (clo - m, chi + m);
+            let mut open = [[true; 2]; 3];
+            let (mut flo, mut fhi) = (full_lo, full_hi);
+            for a in 0..3 {
+                if rlo[a] > lo[a] {
+                    flo[a] = full_lo[a] + ((rlo[a] - pad - full_lo[a]) / self.cell).floor() * self.cell;
+                    open[a][0] = false;
+                }
+                if rhi[a] < hi[a] {
+                    fhi[a] = full_lo[a] + ((rhi[a] + pad - full_lo[a]) / self.cell).ceil() * self.cell;
+                    open[a][1] = false;
+                }
+            }
+            // The outside must still touch an open face, and the region must hold the body.
+            if open.iter().flatten().any(|&o| o) && (0..3).all(|a| flo[a] < fhi[a]) {
+                (glo, ghi, self.open_faces) = (flo, fhi, open);
+                self.region = Some((rlo, rhi));
+            }
+        }
+        self.origin = glo;
+        let span = ghi - glo;
+        self.dims = [0, 1, 2].map(|a| ((span[a] / self.cell - 1e-6).ceil() as usize + 1).max(2));
         let total = self.dims[0] * self.dims[1] * self.dims[2];
         self.dist.clear();
         self.dist.resize(total, Real::INFINITY);
@@ -120,34 +168,18 @@ impl SdfCollider {
         }
     }
 
+    /// Squared distances to the nearest triangle within the band ([`crate::sdf_band`]).
     fn narrow_band(&mut self) {
         let reach = self.band as Real * self.cell;
-        let inv = 1.0 / self.cell;
+        let mut grid = BandGrid {
+            origin: self.origin,
+            cell: self.cell,
+            dims: self.dims,
+            dist2: &mut self.dist,
+            face: &mut self.face,
+        };
         for f in 0..self.body.triangles.len() {
-            let [a, b, c] = self.body.corners(f);
-            let lo = a.inf(&b).inf(&c) - Vec3::repeat(reach);
-            let hi = a.sup(&b).sup(&c) + Vec3::repeat(reach);
-            let range = |axis: usize| {
-                let i0 = ((lo[axis] - self.origin[axis]) * inv).ceil().max(0.0) as usize;
-                let i1 = (((hi[axis] - self.origin[axis]) * inv).floor() as usize)
-                    .min(self.dims[axis] - 1);
-                i0..=i1
-            };
-            let (ri, rj, rk) = (range(0), range(1), range(2));
-            for k in rk {
-                for j in rj.clone() {
-                    for i in ri.clone() {
-                        let p = self.node(i, j, k);
-                        let (q, _) = closest_point_on_triangle(&p, &a, &b, &c);
-                        let d = (q - p).norm_squared();
-                        let n = self.index(i, j, k);
-                        if d < self.dist[n] {
-                            self.dist[n] = d;
-                            self.face[n] = f as u32;
-                        }
-                    }
-                }
-            }
+            grid.add_triangle(f as u32, self.body.corners(f), reach);
         }
     }
 
@@ -197,7 +229,7 @@ impl SdfCollider {
                     }
                     let p = self.node(i, j, k);
                     let (pn, q, _) = self.pseudo_normal(f as usize, &p);
-                    let d = self.dist[n].sqrt();
+                    let d = (p - q).norm();
                     self.dist[n] = if (p - q).dot(&pn) < 0.0 { -d } else { d };
                 }
             }
@@ -214,7 +246,14 @@ impl SdfCollider {
         for k in 0..nz {
             for j in 0..ny {
                 for i in 0..nx {
-                    if i == 0 || j == 0 || k == 0 || i == nx - 1 || j == ny - 1 || k == nz - 1 {
+                    let o = &self.open_faces;
+                    if (i == 0 && o[0][0])
+                        || (j == 0 && o[1][0])
+                        || (k == 0 && o[2][0])
+                        || (i == nx - 1 && o[0][1])
+                        || (j == ny - 1 && o[1][1])
+                        || (k == nz - 1 && o[2][1])
+                    {
                         let n = self.index(i, j, k);
                         if self.dist[n] >= 0.0 {
                             reached[n] = true;
@@ -424,12 +463,23 @@ impl Collider for SdfCollider {
     }
 
     fn update(&mut self, frame: &BodyFrame) {
-        // A body that has not moved (a settle, a still pose) keeps its field: the rebuild is most
-        // of this collider's cost (51 ms a frame on the mannequin at 64 cells).
+        // A body that has not moved (a settle, a still pose) keeps its field, unless the cloth
+        // came near its edge: the rebuild is most of this collider's cost.
         let same = frame.positions == self.body.positions;
-        if self.body.set_frame(frame).is_ok() && !same {
+        let outgrown = match (self.region, self.cloth) {
+            (Some((rlo, rhi)), Some((clo, chi))) => {
+                let s = Vec3::repeat(Self::FOCUS_SLACK);
+                (0..3).any(|a| clo[a] - s[a] < rlo[a] || chi[a] + s[a] > rhi[a])
+            }
+            _ => false,
+        };
+        if self.body.set_frame(frame).is_ok() && (!same || outgrown) {
             self.rebuild();
         }
+    }
+
+    fn focus(&mut self, lo: &Vec3, hi: &Vec3) {
+        self.cloth = Some((*lo, *hi));
     }
 
     fn resolve(&mut self, points: &mut [Vec3], contacts: &mut Vec<Contact>) {

@@ -12,7 +12,7 @@ use tryon_core::shapes::{icosphere, scale_about};
 use tryon_core::stages::Collider;
 
 /// A random closed convex body: an icosphere scaled into an ellipsoid, rotated and moved.
-fn body_strategy() -> impl Strategy<Value = PolyMesh> {
+pub(crate) fn body_strategy() -> impl Strategy<Value = PolyMesh> {
     (
         1u32..4,
         prop::array::uniform3(0.1..0.5f64),
@@ -32,7 +32,7 @@ fn body_strategy() -> impl Strategy<Value = PolyMesh> {
 }
 
 /// Points scattered through the body's neighbourhood (about half of them inside).
-fn points_near(m: &PolyMesh, seeds: &[[f64; 3]]) -> Vec<Vec3> {
+pub(crate) fn points_near(m: &PolyMesh, seeds: &[[f64; 3]]) -> Vec<Vec3> {
     let c: Vec3 = m.positions.iter().sum::<Vec3>() / m.positions.len() as Real;
     seeds
         .iter()
@@ -44,7 +44,7 @@ fn points_near(m: &PolyMesh, seeds: &[[f64; 3]]) -> Vec<Vec3> {
         .collect()
 }
 
-fn seeds() -> impl Strategy<Value = Vec<[f64; 3]>> {
+pub(crate) fn seeds() -> impl Strategy<Value = Vec<[f64; 3]>> {
     prop::collection::vec(prop::array::uniform3(-1.0..1.0f64), 1..120)
 }
 

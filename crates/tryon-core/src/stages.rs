@@ -105,6 +105,10 @@ pub trait Collider: Send {
     fn name(&self) -> &'static str;
     /// Takes the body's new shape. Called whenever the body moved.
     fn update(&mut self, body: &BodyFrame);
+    /// The bounds of the cloth (`lo` to `hi`), given before each [`Collider::update`]: a collider
+    /// may leave out of its work the body farther from them than the cloth can move in a frame.
+    /// The default ignores them.
+    fn focus(&mut self, _lo: &Vec3, _hi: &Vec3) {}
     /// Moves every point found inside the body onto its surface and appends one contact per moved
     /// point. The same point slice (same length, same order) is expected on every call.
     fn resolve(&mut self, points: &mut [Vec3], contacts: &mut Vec<Contact>);

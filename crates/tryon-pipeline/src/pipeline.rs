@@ -290,7 +290,13 @@ impl Pipeline {
                 timers.time("follow_body", || f.carry(pose, body_frame, cloth, dt));
             }
             if let Some(c) = &mut self.collider {
-                timers.time("collider_update", || c.update(body_frame));
+                let cloth = &self.cloth.positions;
+                timers.time("collider_update", || {
+                    if let Some((lo, hi)) = finite_bounds(cloth) {
+                        c.focus(&lo, &hi);
+                    }
+                    c.update(body_frame)
+                });
             }
             if let Some(b) = &mut self.bands {
                 let solver = &mut self.solver;
@@ -395,4 +401,11 @@ impl Pipeline {
             self.surface.triangles.clone()
         }
     }
+}
+
+/// The bounds of the finite points of `p`, if any.
+fn finite_bounds(p: &[Vec3]) -> Option<(Vec3, Vec3)> {
+    let mut it = p.iter().filter(|x| tryon_core::math::is_finite(x));
+    let first = *it.next()?;
+    Some(it.fold((first, first), |(lo, hi), x| (lo.inf(x), hi.sup(x))))
 }

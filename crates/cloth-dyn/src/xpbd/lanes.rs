@@ -266,7 +266,7 @@ mod tests {
         let w: Vec<Real> = (0..32).map(|k| [1.0, 0.5, 2.0, 0.0][k % 4]).collect();
         let alpha = 0.3;
         let mut lanes = x.clone();
-        let (hb, _) = hinge_batches(&hinges, &[0..8]);
+        let (hb, _) = hinge_batches(&hinges, std::slice::from_ref(&(0..8)));
         solve_hinge_batch(&mut lanes, &w, &hb[0], alpha as f32);
         for (h, hg) in hinges.iter().enumerate() {
             let v = hg.v.map(|k| k as usize);
@@ -300,7 +300,7 @@ mod tests {
             })
             .collect();
         let w: Vec<Real> = (0..16).map(|k| [1.0, 0.25, 0.0][k % 3]).collect();
-        let (eb, ranges) = edge_batches(&edges, &[0..6]);
+        let (eb, ranges) = edge_batches(&edges, std::slice::from_ref(&(0..6)));
         assert_eq!(ranges, vec![0..1]);
         let (alpha, h) = (0.02, 0.005);
         let mut lanes = x.clone();
