@@ -74,7 +74,9 @@ fn fold_frame(c: &mut Criterion) {
             st
         });
         let (cloth0, solver0) = (p.cloth.clone(), p.solver.boxed_clone());
-        let times: Vec<_> = (start + 1..=start + frames).map(|k| p.frame_time(k)).collect();
+        let times: Vec<_> = (start + 1..=start + frames)
+            .map(|k| p.frame_time(k))
+            .collect();
         group.bench_function(name, |b| {
             b.iter_batched(
                 || solver0.as_ref().and_then(|s| s.boxed_clone()),

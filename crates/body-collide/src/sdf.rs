@@ -118,11 +118,13 @@ impl SdfCollider {
             let (mut flo, mut fhi) = (full_lo, full_hi);
             for a in 0..3 {
                 if rlo[a] > lo[a] {
-                    flo[a] = full_lo[a] + ((rlo[a] - pad - full_lo[a]) / self.cell).floor() * self.cell;
+                    flo[a] =
+                        full_lo[a] + ((rlo[a] - pad - full_lo[a]) / self.cell).floor() * self.cell;
                     open[a][0] = false;
                 }
                 if rhi[a] < hi[a] {
-                    fhi[a] = full_lo[a] + ((rhi[a] + pad - full_lo[a]) / self.cell).ceil() * self.cell;
+                    fhi[a] =
+                        full_lo[a] + ((rhi[a] + pad - full_lo[a]) / self.cell).ceil() * self.cell;
                     open[a][1] = false;
                 }
             }

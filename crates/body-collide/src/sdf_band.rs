@@ -14,7 +14,6 @@ use wide::{CmpGe, f32x8};
 
 const LANES: usize = 8;
 
-
 /// One triangle, relative to its first corner, set up for distances from eight points at once.
 #[derive(Clone, Copy, Debug)]
 pub struct TriLanes {
@@ -53,7 +52,11 @@ impl TriLanes {
     /// The triangle (a, b, c).
     pub fn new(a: Vec3, b: Vec3, c: Vec3) -> Self {
         let (b, c) = (f3(b - a), f3(c - a));
-        let e = [b, [c[0] - b[0], c[1] - b[1], c[2] - b[2]], [-c[0], -c[1], -c[2]]];
+        let e = [
+            b,
+            [c[0] - b[0], c[1] - b[1], c[2] - b[2]],
+            [-c[0], -c[1], -c[2]],
+        ];
         let n = cross(e[0], [c[0], c[1], c[2]]);
         let n2 = dot(n, n);
         TriLanes {
@@ -190,7 +193,8 @@ mod tests {
             let pts: Vec<Vec3> = (0..LANES)
                 .map(|_| o + Vec3::new(rnd(&mut seed), rnd(&mut seed), rnd(&mut seed)) * 0.05)
                 .collect();
-            let lanes = [0, 1, 2].map(|ax| f32x8::from(std::array::from_fn(|l| (pts[l] - a)[ax] as f32)));
+            let lanes =
+                [0, 1, 2].map(|ax| f32x8::from(std::array::from_fn(|l| (pts[l] - a)[ax] as f32)));
             let got = tri.dist2(lanes).to_array();
             assert!(!any_below(tri.dist2(lanes), 0.0));
             for l in 0..LANES {
@@ -215,8 +219,16 @@ mod tests {
             face: &mut face,
         };
         let tris = [
-            [Vec3::new(0.0, 0.0, 0.0), Vec3::new(0.03, 0.0, 0.0), Vec3::new(0.0, 0.02, 0.01)],
-            [Vec3::new(0.05, 0.05, 0.1), Vec3::new(0.06, 0.04, 0.12), Vec3::new(0.05, 0.07, 0.1)],
+            [
+                Vec3::new(0.0, 0.0, 0.0),
+                Vec3::new(0.03, 0.0, 0.0),
+                Vec3::new(0.0, 0.02, 0.01),
+            ],
+            [
+                Vec3::new(0.05, 0.05, 0.1),
+                Vec3::new(0.06, 0.04, 0.12),
+                Vec3::new(0.05, 0.07, 0.1),
+            ],
         ];
         for (f, t) in tris.iter().enumerate() {
             grid.add_triangle(f as u32, *t, 1.0);
@@ -264,6 +276,9 @@ mod tests {
                 assert!(face[n] == u32::MAX, "node {n} at {gap} m reached");
             }
         }
-        assert!(inside > 10 && outside > 10, "{inside} within, {outside} beyond");
+        assert!(
+            inside > 10 && outside > 10,
+            "{inside} within, {outside} beyond"
+        );
     }
 }

@@ -116,7 +116,10 @@ pub fn hinge_batches(
 }
 
 /// The edges of each colour in batches, and each colour's range of them.
-pub fn edge_batches(edges: &[Edge], ranges: &[Range<usize>]) -> (Vec<EdgeBatch>, Vec<Range<usize>>) {
+pub fn edge_batches(
+    edges: &[Edge],
+    ranges: &[Range<usize>],
+) -> (Vec<EdgeBatch>, Vec<Range<usize>>) {
     let pad = Edge {
         i: 0,
         j: 0,
@@ -152,7 +155,11 @@ fn gather_w(w: &[Real], v: &[u32; LANES]) -> f32x8 {
 
 /// `x[v[l]] += m[l] * s[l]` for every lane.
 fn scatter(x: &mut [Vec3], v: &[u32; LANES], m: V3, s: f32x8) {
-    let (mx, my, mz) = ((m.x * s).to_array(), (m.y * s).to_array(), (m.z * s).to_array());
+    let (mx, my, mz) = (
+        (m.x * s).to_array(),
+        (m.y * s).to_array(),
+        (m.z * s).to_array(),
+    );
     for l in 0..LANES {
         x[v[l] as usize] += Vec3::new(mx[l] as Real, my[l] as Real, mz[l] as Real);
     }
@@ -166,7 +173,11 @@ fn keep(mask: f32x8, v: f32x8) -> f32x8 {
 /// Solves a batch of hinges in place (compliance `alpha`, already over the step squared).
 pub fn solve_hinge_batch(x: &mut [Vec3], w: &[Real], hb: &HingeBatch, alpha: f32) {
     let [va, vb, vc, vd] = &hb.v;
-    let (e, c, d) = (gather_rel(x, vb, va), gather_rel(x, vc, va), gather_rel(x, vd, va));
+    let (e, c, d) = (
+        gather_rel(x, vb, va),
+        gather_rel(x, vc, va),
+        gather_rel(x, vd, va),
+    );
     let el2 = e.dot(e);
     let n1 = c.cross(c.sub(e));
     let n2 = d.sub(e).cross(d);
@@ -318,8 +329,15 @@ mod tests {
             };
             for (k, s, want_f) in [(i, w[i], n * dl / (h * h)), (j, -w[j], -n * dl / (h * h))] {
                 let want = x[k] + n * (s * dl);
-                assert!((want - lanes[k]).norm() < 1e-9, "{k}: {want:?} vs {:?}", lanes[k]);
-                assert!((want_f - f[k]).norm() < 1e-5 * want_f.norm() + 1e-9, "force {k}");
+                assert!(
+                    (want - lanes[k]).norm() < 1e-9,
+                    "{k}: {want:?} vs {:?}",
+                    lanes[k]
+                );
+                assert!(
+                    (want_f - f[k]).norm() < 1e-5 * want_f.norm() + 1e-9,
+                    "force {k}"
+                );
             }
         }
         // The two padded lanes moved nothing and recorded nothing.

@@ -18,7 +18,9 @@ use crate::retry::frame_with_retries;
 use crate::strain::Tethers;
 pub use constraints::hinge_move;
 use constraints::{Edge, Hinge, colour, dihedral};
-use lanes::{EdgeBatch, HingeBatch, edge_batches, hinge_batches, solve_edge_batch, solve_hinge_batch};
+use lanes::{
+    EdgeBatch, HingeBatch, edge_batches, hinge_batches, solve_edge_batch, solve_hinge_batch,
+};
 use std::collections::HashMap;
 use std::ops::Range;
 use tryon_core::frames::{CoarseFrame, Contact, StepReport};
