@@ -8,6 +8,7 @@ mod hard_cases;
 mod makehuman_body;
 mod real_assets;
 mod retarget;
+mod shirt;
 mod tradeoff_scenes;
 
 use body_collide::{

@@ -1,5 +1,5 @@
 //! garment-fit: garments sized from the same measurements as the body. Today: coarse patterns (a
-//! strapped one-piece dress of P1's size and a skirt) built as tubes whose sections are the body's
+//! strapped one-piece dress of P1's size and a skirt), a short-sleeved shirt cut from the body itself ([`shirt`]) built as tubes whose sections are the body's
 //! torso sections offset by the ease, and [`place_outside`] which clears any vertex the body still
 //! holds through the `Collider` contract; MakeHuman .mhclo garments refitted onto a morphed body
 //! ([`fit_garment`]).
@@ -7,10 +7,12 @@
 pub mod attach;
 pub mod bands;
 pub mod close;
+mod gusset;
 pub mod layer;
 pub mod mhclo;
 pub mod patterns;
 pub mod pieces;
+pub mod shirt;
 pub mod weld;
 
 #[cfg(test)]
@@ -23,6 +25,7 @@ pub use layer::{LayerPlacement, place_over};
 pub use mhclo::{FitError, binding_scales, fit_garment, fit_garment_outside, fit_positions};
 pub use patterns::{DressParams, Garment, PatternError, SkirtParams, dress, place_outside, skirt};
 pub use pieces::place_pieces;
+pub use shirt::{Arm, ShirtBody, ShirtParams, shirt, split_in_four};
 pub use weld::{Welded, median_edge, weld_short_edges};
 
 /// Union-find root of `a` with path halving (`parent[r] == r` at a root).

@@ -30,9 +30,16 @@ pub enum PatternError {
         min: Real,
         max: Real,
     },
+    #[error("cannot cut the shirt from the body: {0}")]
+    Cut(String),
 }
 
-fn check(name: &'static str, value: Real, min: Real, max: Real) -> Result<(), PatternError> {
+pub(crate) fn check(
+    name: &'static str,
+    value: Real,
+    min: Real,
+    max: Real,
+) -> Result<(), PatternError> {
     if value.is_finite() && value >= min && value <= max {
         Ok(())
     } else {

@@ -147,6 +147,7 @@ fn bands(
         let (band_gap, waist_gap) = match worn.garment {
             GarmentSection::Dress(g) => (g.band_gap, 0.0),
             GarmentSection::Skirt(g) => (g.band_gap, 0.0),
+            GarmentSection::Shirt(g) => (g.band_gap, 0.0),
             GarmentSection::Mhclo(g) => (g.band_gap, g.waist_gap),
             GarmentSection::Square(_) => (0.0, 0.0),
         };

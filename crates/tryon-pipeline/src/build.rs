@@ -5,7 +5,7 @@ use crate::real;
 use crate::scene::BroadPhaseName;
 use crate::scene::{
     BodySection, CollisionMethod, EffectsSection, GarmentSection, IntegratorName, MannequinBody,
-    MaterialName, MotionSection, ObjectBody, Scene, SolverName, XpbdBendingName,
+    MaterialName, MotionSection, ObjectBody, Scene, ShirtSpec, SolverName, XpbdBendingName,
 };
 use body_collide::{
     BodyError, DepthMapCollider, ExactCollider, NearestVertexCollider, SdfCollider,
@@ -18,7 +18,7 @@ use cloth_dyn::{
     BuildClothError, ClothModel, ClothParams, ClothSim, Handle, IntegratorKind, VbdParams, VbdSim,
     XpbdBending, XpbdParams, XpbdSim, presets,
 };
-use garment_fit::{DressParams, PatternError, SkirtParams};
+use garment_fit::{DressParams, PatternError, ShirtParams, SkirtParams};
 use mocap_retarget::{ArmRaise, ClipError, Walk, WalkParams};
 use thiserror::Error;
 use tryon_core::math::{Real, Vec3};
@@ -223,6 +223,53 @@ fn mannequin(scene: &Scene, spec: &MannequinBody) -> Result<BuiltBody, AssembleE
     })
 }
 
+/// The shirt of `g` cut from the mannequin of `m` (the scene's body: both are built from the same
+/// measurements). A vertex belongs to an arm when its strongest influence is that arm's upper arm,
+/// forearm or hand.
+fn shirt(m: &tryon_core::measure::Measurements, g: &ShirtSpec) -> Result<PolyMesh, AssembleError> {
+    use tryon_core::pose::mannequin_joints as j;
+    let man = Mannequin::new(m)?;
+    let joint = |name: &str| man.skeleton.names.iter().position(|n| n == name);
+    let chains = [
+        [j::UPPERARM_L, j::FOREARM_L, j::HAND_L],
+        [j::UPPERARM_R, j::FOREARM_R, j::HAND_R],
+    ]
+    .map(|c| c.map(joint));
+    let arm_of: Vec<Option<u8>> = (0..man.mesh.positions.len())
+        .map(|v| {
+            let (w, js) = (man.skin.weights[v], man.skin.joints[v]);
+            let k = (0..4).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap_or(0);
+            let strongest = Some(js[k] as usize);
+            (0..2u8).find(|&a| chains[a as usize].contains(&strongest))
+        })
+        .collect();
+    let arms = chains.map(|c| {
+        let (root, elbow) = match (c[0], c[1]) {
+            (Some(a), Some(b)) => (man.joint_rest[a], man.joint_rest[b]),
+            _ => (Vec3::zeros(), Vec3::x()),
+        };
+        garment_fit::Arm {
+            root,
+            dir: (elbow - root).try_normalize(1e-12).unwrap_or_else(Vec3::x),
+        }
+    });
+    let body = garment_fit::ShirtBody {
+        mesh: &man.mesh,
+        arm_of: &arm_of,
+        arms,
+    };
+    let p = ShirtParams {
+        ease: [g.ease[0], g.ease[1], g.ease[2]],
+        sleeve_ease: g.sleeve_ease,
+        sleeve_length: g.sleeve_length,
+        hem_below_hip: g.hem_below_hip,
+        subdivisions: g.subdivisions,
+    };
+    // The least clearance over the skin: the cloth's thickness at the default figure.
+    let mut collider = ExactCollider::new(&man.mesh, 0.004 * m.scale())?;
+    Ok(garment_fit::shirt(m, &body, &mut collider, &p)?.mesh)
+}
+
 /// `body` pressed apart where its parts meet, if the scene asks for it: the gap holds two layers
 /// of the cloth's thickness.
 fn press(body: SkinnedBody, scene: &Scene) -> SkinnedBody {
@@ -253,6 +300,7 @@ pub fn garment_of(
             };
             garment_fit::dress(&m, &p)?.mesh
         }
+        GarmentSection::Shirt(g) => shirt(&m, g)?,
         GarmentSection::Skirt(g) => {
             let p = SkirtParams {
                 ease: [g.ease[0], g.ease[1]],

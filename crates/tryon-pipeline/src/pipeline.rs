@@ -369,6 +369,7 @@ impl Pipeline {
                     .map_or("garment".into(), |s| s.to_string_lossy().into_owned()),
                 G::Dress(_) => "dress".into(),
                 G::Skirt(_) => "skirt".into(),
+                G::Shirt(_) => "shirt".into(),
                 G::Square(_) => "sheet".into(),
             })
             .collect();

@@ -1,7 +1,7 @@
 //! The scene file: TOML read with every key's position kept, the tables `[body]`, `[garment]` and
 //! `[motion]` read as the variant their `kind` names (each owning its keys), then every value
 //! checked against what it allows. Errors name the file, the line, the key and what is allowed.
-//! The schema is in `schema.rs` and `sections.rs`; `docs.rs` writes its reference.
+//! The schema is in `schema.rs`, `sections.rs` and `patterns.rs`; `docs.rs` writes its reference.
 
 use std::path::{Path, PathBuf};
 use thiserror::Error;
@@ -9,6 +9,7 @@ use thiserror::Error;
 mod check;
 pub mod docs;
 mod folds;
+mod patterns;
 mod read;
 mod schema;
 mod sections;
@@ -17,7 +18,7 @@ pub use folds::{FoldShape, FoldSpec, FoldingSection, SmoothName};
 pub use schema::{
     ArmRaiseSpec, BodySection, BvhSpec, DressSpec, GarmentSection, IntegratorName, MakeHumanSpec,
     MannequinBody, MaterialName, MhcloSpec, MotionSection, ObjectBody, RigName, SceneSection,
-    SkirtSpec, SphereBody, SquareSpec, StillSpec, WalkSpec, WearSpec,
+    ShirtSpec, SkirtSpec, SphereBody, SquareSpec, StillSpec, WalkSpec, WearSpec,
 };
 pub use sections::{
     BroadPhaseName, ClothSection, CollisionMethod, EffectsSection, OutputSection, SolverName,

@@ -360,7 +360,7 @@ impl Scene {
                 quoted,
                 &format!("\"square\" on {body} body"),
             ),
-            "makehuman" if matches!(garment, "dress" | "skirt") => wrong(
+            "makehuman" if matches!(garment, "dress" | "skirt" | "shirt") => wrong(
                 "garment",
                 "kind",
                 quoted,
@@ -401,6 +401,7 @@ mod erased {
             match self {
                 GarmentSection::Dress(_) => "dress",
                 GarmentSection::Skirt(_) => "skirt",
+                GarmentSection::Shirt(_) => "shirt",
                 GarmentSection::Square(_) => "square",
                 GarmentSection::Mhclo(_) => "mhclo",
             }

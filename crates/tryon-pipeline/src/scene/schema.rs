@@ -5,12 +5,13 @@
 //! allowed ranges are `schemars` attributes, read by the checks and by the generated reference
 //! (docs/scenes.md), so the two cannot disagree.
 
-use garment_fit::{DressParams, SkirtParams};
 use mocap_retarget::{ArmRaise, RetargetOptions, WalkParams};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use tryon_core::math::Real;
 use tryon_core::measure::Measurements;
+
+pub use super::patterns::{DressSpec, ShirtSpec, SkirtSpec};
 
 /// How fast and how long the scene runs.
 #[derive(Clone, Debug, Deserialize, Serialize, JsonSchema, PartialEq)]
@@ -225,6 +226,8 @@ pub enum GarmentSection {
     Dress(DressSpec),
     /// A skirt cut from the mannequin's measurements.
     Skirt(SkirtSpec),
+    /// A short-sleeved shirt cut from the mannequin's own surface.
+    Shirt(ShirtSpec),
     /// A horizontal square sheet (the drape and P4's scene).
     Square(SquareSpec),
     /// A MakeHuman garment (.mhclo binding and its OBJ) fitted onto the MakeHuman body.
@@ -263,82 +266,6 @@ impl Default for WearSpec {
 impl WearSpec {
     /// The keys every garment kind takes.
     pub const KEYS: [&'static str; 3] = ["layer", "density", "stiffness"];
-}
-
-/// A dress pattern; garment-fit's defaults.
-#[derive(Clone, Debug, Deserialize, Serialize, JsonSchema, PartialEq)]
-#[serde(deny_unknown_fields, default)]
-pub struct DressSpec {
-    /// Ease (extra girth) at bust, waist and hip (m).
-    #[schemars(length(equal = 3), inner(range(min = 0.0, max = 0.5)))]
-    pub ease: Vec<Real>,
-    /// Extra girth at the hem over the hip girth (m).
-    #[schemars(range(min = 0.0, max = 2.0))]
-    pub flare: Real,
-    /// Hem height above the knee (m; negative: below).
-    #[schemars(range(min = -0.3, max = 0.3))]
-    pub hem_above_knee: Real,
-    /// Samples around a ring.
-    #[schemars(range(min = 16, max = 192))]
-    pub columns: usize,
-    /// Spacing of rings (m).
-    #[schemars(range(min = 0.005, max = 0.2))]
-    pub row_spacing: Real,
-    /// Elastic bands (m): border loops lying within this distance of the body grip it; 0 = none.
-    #[schemars(range(min = 0.0, max = 0.05))]
-    pub band_gap: Real,
-}
-
-impl Default for DressSpec {
-    fn default() -> Self {
-        let d = DressParams::default();
-        DressSpec {
-            ease: d.ease.to_vec(),
-            flare: d.flare,
-            hem_above_knee: d.hem_above_knee,
-            columns: d.columns,
-            row_spacing: d.row_spacing,
-            band_gap: 0.0,
-        }
-    }
-}
-
-/// A skirt pattern; garment-fit's defaults.
-#[derive(Clone, Debug, Deserialize, Serialize, JsonSchema, PartialEq)]
-#[serde(deny_unknown_fields, default)]
-pub struct SkirtSpec {
-    /// Ease (extra girth) at waist and hip (m).
-    #[schemars(length(equal = 2), inner(range(min = 0.0, max = 0.5)))]
-    pub ease: Vec<Real>,
-    /// Extra girth at the hem over the hip girth (m).
-    #[schemars(range(min = 0.0, max = 2.0))]
-    pub flare: Real,
-    /// Hem height above the knee (m; negative: below).
-    #[schemars(range(min = -0.3, max = 0.3))]
-    pub hem_above_knee: Real,
-    /// Samples around a ring.
-    #[schemars(range(min = 16, max = 192))]
-    pub columns: usize,
-    /// Spacing of rings (m).
-    #[schemars(range(min = 0.005, max = 0.2))]
-    pub row_spacing: Real,
-    /// Elastic bands (m): border loops lying within this distance of the body grip it; 0 = none.
-    #[schemars(range(min = 0.0, max = 0.05))]
-    pub band_gap: Real,
-}
-
-impl Default for SkirtSpec {
-    fn default() -> Self {
-        let d = SkirtParams::default();
-        SkirtSpec {
-            ease: d.ease.to_vec(),
-            flare: d.flare,
-            hem_above_knee: d.hem_above_knee,
-            columns: d.columns,
-            row_spacing: d.row_spacing,
-            band_gap: 0.0,
-        }
-    }
 }
 
 /// A square sheet.
