@@ -18,7 +18,7 @@ duration = 0.5
 kind = "mannequin"
 [garment]
 kind = "shirt"
-band_gap = 0.01
+subdivisions = 1
 [motion]
 kind = "still"
 [cloth]
