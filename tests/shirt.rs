@@ -141,3 +141,19 @@ fn the_shirt_stays_on_the_standing_body_unstretched() {
         .fold(0.0, Real::max);
     assert!(drop < 0.05, "a vertex fell {drop} m");
 }
+
+/// A heavy figure's mannequin has its arms through its sides (the body itself crosses itself in the
+/// A-pose); a shirt cut from it would too, and tears at the first frame. It is refused, saying why.
+#[test]
+fn a_shirt_for_a_mannequin_whose_arms_pass_into_its_sides_is_refused() {
+    let text = SCENE.replace(
+        "kind = \"mannequin\"",
+        "kind = \"mannequin\"\nheight = 1.75\nbust = 1.2\nwaist = 1.1\nhip = 1.2",
+    );
+    let scene = Scene::parse(&text, std::path::Path::new("shirt.toml")).expect("scene");
+    let Err(e) = Pipeline::new(scene) else {
+        panic!("a shirt for this figure was made")
+    };
+    let e = e.to_string();
+    assert!(e.contains("crosses itself") && e.contains("arms"), "{e}");
+}

@@ -267,7 +267,22 @@ fn shirt(m: &tryon_core::measure::Measurements, g: &ShirtSpec) -> Result<PolyMes
     };
     // The least clearance over the skin: the cloth's thickness at the default figure.
     let mut collider = ExactCollider::new(&man.mesh, 0.004 * m.scale())?;
-    Ok(garment_fit::shirt(m, &body, &mut collider, &p)?.mesh)
+    let mesh = garment_fit::shirt(m, &body, &mut collider, &p)?.mesh;
+    // A heavy figure's mannequin has its arms through its sides in the A-pose: a shirt cut from it
+    // crosses itself there and tears at the first frame.
+    let (tris, _) = mesh.triangulate();
+    let crossing = crate::crossings::crossings(&mesh.positions, &tris).len();
+    if crossing > 0 {
+        let (body_tris, _) = man.mesh.triangulate();
+        let body = crate::crossings::crossings(&man.mesh.positions, &body_tris).len();
+        return Err(PatternError::Cut(format!(
+            "the shirt crosses itself in {crossing} triangle pairs (the mannequin of these \
+             measurements crosses itself in {body}: its arms pass into its sides, so the \
+             sleeves would too)"
+        ))
+        .into());
+    }
+    Ok(mesh)
 }
 
 /// `body` pressed apart where its parts meet, if the scene asks for it: the gap holds two layers
