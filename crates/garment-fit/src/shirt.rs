@@ -102,6 +102,15 @@ pub fn shirt(
             body.mesh.positions.len()
         )));
     }
+    if let Some(v) = body.arm_of.iter().position(|a| a.is_some_and(|a| a > 1)) {
+        return Err(PatternError::Cut(format!(
+            "body vertex {v} is labelled arm {}: only arms 0 and 1 exist",
+            body.arm_of[v].unwrap_or(0)
+        )));
+    }
+    body.mesh
+        .validate()
+        .map_err(|e| PatternError::Cut(format!("body mesh: {e}")))?;
     let lm = m.landmarks();
     let sc = m.scale();
     let hem = lm.hip - p.hem_below_hip * sc;

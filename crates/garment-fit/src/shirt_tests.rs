@@ -113,3 +113,27 @@ fn a_body_that_is_not_a_figure_is_refused_with_what_was_found() {
     let e = shirt(&m, &body, &mut NoCollider, &ShirtParams::default()).unwrap_err();
     assert!(e.to_string().contains("1 openings in 1 pieces"), "{e}");
 }
+
+#[test]
+fn bad_arm_labels_and_broken_body_meshes_are_errors_not_panics() {
+    let (mesh, mut arm_of) = nothing();
+    arm_of[2] = Some(2);
+    let m = Measurements::default();
+    let body = ShirtBody {
+        mesh: &mesh,
+        arm_of: &arm_of,
+        arms: arms(),
+    };
+    let e = shirt(&m, &body, &mut NoCollider, &ShirtParams::default()).unwrap_err();
+    assert!(e.to_string().contains("vertex 2 is labelled arm 2"), "{e}");
+    let mut broken = mesh.clone();
+    broken.faces.push(tryon_core::mesh::Face::Tri([0, 1, 9]));
+    let (_, arm_of) = nothing();
+    let body = ShirtBody {
+        mesh: &broken,
+        arm_of: &arm_of,
+        arms: arms(),
+    };
+    let e = shirt(&m, &body, &mut NoCollider, &ShirtParams::default()).unwrap_err();
+    assert!(e.to_string().contains("refers to vertex 9"), "{e}");
+}
