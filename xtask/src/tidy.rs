@@ -18,6 +18,7 @@ const STAGES: &[&str] = &[
     "mocap-retarget",
     "garment-fit",
     "fold",
+    "kimono",
 ];
 const MAY_PRINT: &[&str] = &["tryon-cli", "tryon-tradeoff", "xtask"];
 /// The scene reference generated from the schema.

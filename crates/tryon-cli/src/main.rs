@@ -77,6 +77,36 @@ enum Command {
         #[arg(long = "set", value_name = "TABLE.KEY=VALUE")]
         sets: Vec<String>,
     },
+    /// Fit a kimono to body measurements (P2): tailoring dimensions by the standard formulas, the
+    /// blend-shape fit per sub-mesh, the print correction. Writes kimono.glb (with the bolt's
+    /// print), before.png and after.png (the print before and after its correction) and fit.json
+    /// (Table 1: target, initial, fitted value and relative error per dimension).
+    Kimono {
+        /// Height, m.
+        #[arg(long)]
+        height: f64,
+        /// Bust girth, m.
+        #[arg(long)]
+        bust: f64,
+        /// Waist girth, m.
+        #[arg(long)]
+        waist: f64,
+        /// Hip girth, m.
+        #[arg(long)]
+        hip: f64,
+        /// 裄: back-neck centre to the wrist bone, arm 45° down, m (default: height x 0.4 + 0.02).
+        #[arg(long)]
+        yuki: Option<f64>,
+        /// 袖丈: sleeve length, m (default: height x 0.3).
+        #[arg(long)]
+        sleeve_length: Option<f64>,
+        /// Output directory.
+        #[arg(long, default_value = "out/kimono")]
+        out: PathBuf,
+        /// No table.
+        #[arg(long, short)]
+        quiet: bool,
+    },
     /// Summarise an asset: OBJ, BVH or MakeHuman file (counts, joints, frames, fps, bounding box,
     /// likely units).
     Inspect {
@@ -294,6 +324,27 @@ fn main() -> ExitCode {
                 Err(e) => Err(Failure::BadInput(format!("{}: {e}", scene.display()))),
             }
         }),
+        Command::Kimono {
+            height,
+            bust,
+            waist,
+            hip,
+            yuki,
+            sleeve_length,
+            out,
+            quiet,
+        } => kimono(
+            &tryon_pipeline::kimono::Wearer {
+                height,
+                bust,
+                waist,
+                hip,
+                yuki,
+                sleeve_length,
+            },
+            &out,
+            quiet,
+        ),
         Command::Check { scene, sets } => load(&scene, &sets).and_then(|s| {
             let p = assemble(s, &scene.display().to_string())?;
             println!(
@@ -319,6 +370,47 @@ fn main() -> ExitCode {
             ExitCode::from(1)
         }
     }
+}
+
+/// `tryon kimono`: fit, write, print Table 1.
+fn kimono(w: &tryon_pipeline::kimono::Wearer, out: &Path, quiet: bool) -> Result<(), Failure> {
+    use tryon_pipeline::kimono::KimonoError;
+    let k = tryon_pipeline::kimono::fit_kimono(w).map_err(|e| match e {
+        KimonoError::Measurements(_) => Failure::BadInput(e.to_string()),
+        e => Failure::Internal(e.to_string()),
+    })?;
+    mark_generated(out);
+    tryon_pipeline::kimono::write_kimono(out, &k, (900, 1000))
+        .map_err(|e| Failure::Internal(e.to_string()))?;
+    if !quiet {
+        let r = &k.report;
+        println!(
+            "{:<38} {:>9} {:>9} {:>9} {:>8}",
+            "dimension", "target m", "initial", "fitted", "error"
+        );
+        for d in &r.dimensions {
+            println!(
+                "{:<38} {:>9.4} {:>9.4} {:>9.4} {:>7.2}%",
+                d.name,
+                d.target_m,
+                d.initial_m,
+                d.fitted_m,
+                100.0 * d.rel_error
+            );
+        }
+        println!(
+            "mean relative error {:.2}% (initial {:.2}%), max {:.2}%; print squares' aspect {:.3} before the correction, {:.3} after; fit {:.1} ms, print {:.1} ms",
+            100.0 * r.mean_rel_error,
+            100.0 * r.initial_mean_rel_error,
+            100.0 * r.max_rel_error,
+            r.print.before[0],
+            r.print.after[0],
+            r.fit_ms,
+            r.print_ms
+        );
+        println!("wrote {}", out.display());
+    }
+    Ok(())
 }
 
 /// A share as a percentage with enough digits that a small one does not read as 0.0%.

@@ -13,6 +13,7 @@ pub mod makehuman;
 pub mod obj;
 pub mod preview;
 pub mod read;
+pub mod textured;
 
 pub use atomic::{write_atomic, write_atomic_with};
 pub use bvh::{guess_unit, parse_bvh, read_bvh};
@@ -22,6 +23,7 @@ pub use makehuman::{MhRig, load_makehuman, read_binding, read_mhskel, read_mhw, 
 pub use obj::{parse_obj, read_obj};
 pub use preview::{Camera, Image, PreviewError, PreviewMesh, garment_colour, render, write_png};
 pub use read::ReadError;
+pub use textured::{Texture, TexturedError, TexturedMesh, render_textured, write_textured_glb};
 
 /// Writes `value` as pretty JSON, atomically.
 pub fn write_json<T: serde::Serialize>(path: &std::path::Path, value: &T) -> std::io::Result<()> {

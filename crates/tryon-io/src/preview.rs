@@ -107,33 +107,67 @@ pub enum PreviewError {
     Encode { path: PathBuf, message: String },
 }
 
-/// Renders the meshes as seen by `camera` into a `width` x `height` picture.
-pub fn render(meshes: &[PreviewMesh], camera: &Camera, width: u32, height: u32) -> Image {
-    let (w, h) = (width.max(1) as usize, height.max(1) as usize);
+/// The picture's frame: a soft vertical gradient to draw on, and a depth buffer.
+pub(crate) fn canvas(w: usize, h: usize) -> (Vec<u8>, Vec<Real>) {
     let mut rgb = vec![0u8; w * h * 3];
     for (k, px) in rgb.chunks_mut(3).enumerate() {
-        // A soft vertical gradient background.
         let t = (k / w) as Real / h as Real;
         let g = (235.0 - 40.0 * t) as u8;
         px.copy_from_slice(&[g, g, (g as Real * 1.03).min(255.0) as u8]);
     }
-    let mut depth = vec![Real::INFINITY; w * h];
-    let fwd = (camera.target - camera.eye).normalize();
-    let right = fwd.cross(&camera.up).normalize();
-    let up = right.cross(&fwd);
-    let f = 1.0 / (camera.fov_y.to_radians() * 0.5).tan();
-    let aspect = w as Real / h as Real;
-    let light = (-fwd + up * 0.6 + right * 0.3).normalize();
-    let project = |p: &Vec3| -> Option<(Real, Real, Real)> {
-        let r = p - camera.eye;
-        let z = r.dot(&fwd);
+    (rgb, vec![Real::INFINITY; w * h])
+}
+
+/// A camera's projection onto a `w` x `h` picture and the light that shades it.
+pub(crate) struct View {
+    eye: Vec3,
+    fwd: Vec3,
+    right: Vec3,
+    up: Vec3,
+    f: Real,
+    aspect: Real,
+    w: Real,
+    h: Real,
+    pub light: Vec3,
+}
+
+impl View {
+    pub fn new(camera: &Camera, w: usize, h: usize) -> View {
+        let fwd = (camera.target - camera.eye).normalize();
+        let right = fwd.cross(&camera.up).normalize();
+        let up = right.cross(&fwd);
+        View {
+            eye: camera.eye,
+            fwd,
+            right,
+            up,
+            f: 1.0 / (camera.fov_y.to_radians() * 0.5).tan(),
+            aspect: w as Real / h as Real,
+            w: w as Real,
+            h: h as Real,
+            light: (-fwd + up * 0.6 + right * 0.3).normalize(),
+        }
+    }
+
+    /// Screen x, y and depth of `p`, if it is in front of the camera.
+    pub fn project(&self, p: &Vec3) -> Option<(Real, Real, Real)> {
+        let r = p - self.eye;
+        let z = r.dot(&self.fwd);
         if z <= 1e-6 || !z.is_finite() {
             return None;
         }
-        let x = r.dot(&right) * f / (z * aspect);
-        let y = r.dot(&up) * f / z;
-        Some(((x + 1.0) * 0.5 * w as Real, (1.0 - y) * 0.5 * h as Real, z))
-    };
+        let x = r.dot(&self.right) * self.f / (z * self.aspect);
+        let y = r.dot(&self.up) * self.f / z;
+        Some(((x + 1.0) * 0.5 * self.w, (1.0 - y) * 0.5 * self.h, z))
+    }
+}
+
+/// Renders the meshes as seen by `camera` into a `width` x `height` picture.
+pub fn render(meshes: &[PreviewMesh], camera: &Camera, width: u32, height: u32) -> Image {
+    let (w, h) = (width.max(1) as usize, height.max(1) as usize);
+    let (mut rgb, mut depth) = canvas(w, h);
+    let view = View::new(camera, w, h);
+    let (light, project) = (view.light, |p: &Vec3| view.project(p));
     for m in meshes {
         for t in m.triangles {
             let Some(tri) = t
@@ -170,6 +204,19 @@ fn fill(
     h: usize,
     s: [(Real, Real, Real); 3],
     color: [u8; 3],
+) {
+    fill_with(rgb, depth, w, h, s, &|_| color);
+}
+
+/// Fills one screen triangle (x, y, depth) with a z-test, each pixel the colour `color` gives for
+/// its barycentric coordinates.
+pub(crate) fn fill_with(
+    rgb: &mut [u8],
+    depth: &mut [Real],
+    w: usize,
+    h: usize,
+    s: [(Real, Real, Real); 3],
+    color: &dyn Fn([Real; 3]) -> [u8; 3],
 ) {
     let area = (s[1].0 - s[0].0) * (s[2].1 - s[0].1) - (s[2].0 - s[0].0) * (s[1].1 - s[0].1);
     if area.abs() < 1e-12 {
@@ -217,7 +264,7 @@ fn fill(
             let k = y * w + x;
             if z < depth[k] {
                 depth[k] = z;
-                rgb[3 * k..3 * k + 3].copy_from_slice(&color);
+                rgb[3 * k..3 * k + 3].copy_from_slice(&color([w0, w1, w2]));
             }
         }
     }

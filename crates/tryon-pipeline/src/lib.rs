@@ -15,6 +15,7 @@ pub mod drape;
 pub mod export;
 pub mod folding;
 pub mod hold;
+pub mod kimono;
 pub mod metrics;
 pub mod pipeline;
 pub mod real;
