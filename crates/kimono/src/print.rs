@@ -123,6 +123,10 @@ pub fn correct_print(
     }
     // Then the same energy against all neighbours, sweep after sweep, so where two fronts of the
     // spreading met the cloth settles between them.
+    let sweep = PrintParams {
+        iterations: 2,
+        ..*p
+    };
     for _ in 0..p.sweeps {
         for q in 0..uv.len() {
             if seeded[q] {
@@ -133,7 +137,7 @@ pub fn correct_print(
                 .map(|&a| neighbour(q, a as usize, &uv))
                 .collect();
             if !nb.is_empty() {
-                uv[q] = minimise(uv0[q], &nb, p);
+                uv[q] = minimise(uv0[q], &nb, &sweep);
             }
         }
     }
@@ -153,6 +157,24 @@ fn seed(
     moved: &mut [bool],
 ) {
     // Scaled UV edges: (uv vertex a, uv vertex b, the ratio).
+    // The UV edges of each mesh edge, one per triangle side it lies on.
+    let mut uv_of: std::collections::HashMap<(u32, u32), Vec<(usize, usize)>> = Default::default();
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (tri[k], tri[(k + 1) % 3]);
+            let ut = mesh.uv_triangles[t];
+            let (ua, ub) = (ut[k] as usize, ut[(k + 1) % 3] as usize);
+            let (key, uv) = if a < b {
+                ((a, b), (ua, ub))
+            } else {
+                ((b, a), (ub, ua))
+            };
+            let list = uv_of.entry(key).or_default();
+            if !list.contains(&uv) {
+                list.push(uv);
+            }
+        }
+    }
     let mut edges: Vec<(usize, usize, Real)> = Vec::new();
     for (k, set) in mesh.dimensions.iter().enumerate() {
         let (l0, l1) = (mesh.measure(k, before), mesh.measure(k, after));
@@ -160,23 +182,14 @@ fn seed(
             continue;
         }
         let ratio = l1 / l0;
-        for (t, tri) in mesh.triangles.iter().enumerate() {
-            for e in &set.edges {
-                let (ia, ib) = (
-                    tri.iter().position(|&v| v == e[0]),
-                    tri.iter().position(|&v| v == e[1]),
-                );
-                if let (Some(ia), Some(ib)) = (ia, ib) {
-                    let (a, b) = (
-                        mesh.uv_triangles[t][ia] as usize,
-                        mesh.uv_triangles[t][ib] as usize,
-                    );
-                    if !edges
-                        .iter()
-                        .any(|&(x, y, _)| (x, y) == (a, b) || (x, y) == (b, a))
-                    {
-                        edges.push((a, b, ratio));
-                    }
+        for e in &set.edges {
+            let key = (e[0].min(e[1]), e[0].max(e[1]));
+            for &(a, b) in uv_of.get(&key).into_iter().flatten() {
+                if !edges
+                    .iter()
+                    .any(|&(x, y, _)| (x, y) == (a, b) || (x, y) == (b, a))
+                {
+                    edges.push((a, b, ratio));
                 }
             }
         }
