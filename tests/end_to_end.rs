@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use tryon_core::math::Real;
 use tryon_pipeline::{DEMO_SCENE, Pipeline, Scene, SceneError};
 
-fn scratch_dir(name: &str) -> PathBuf {
+pub fn scratch_dir(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("tryon-test-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     d
@@ -21,7 +21,7 @@ pub fn repo() -> PathBuf {
 }
 
 /// Runs the Khronos validator (tools/gltf-validate, installed by `.ci/run` and `cargo xtask ci`).
-fn khronos_errors(glb: &Path) -> String {
+pub fn khronos_errors(glb: &Path) -> String {
     let tool = repo().join("tools/gltf-validate");
     assert!(
         tool.join("node_modules/gltf-validator").exists(),

@@ -5,6 +5,7 @@ mod cloth_cloth;
 mod end_to_end;
 mod folds;
 mod hard_cases;
+mod kimono;
 mod makehuman_body;
 mod real_assets;
 mod retarget;

@@ -1,0 +1,73 @@
+//! P2's kimono end to end (`tryon kimono`'s job): fitted to wearers who are not among the family's
+//! targets, Table 1's errors within issue 23's bounds, the print squarer after its correction
+//! than before, and the outputs readable: a GLB that passes the Khronos validator, two pictures
+//! and fit.json with Table 1.
+
+use crate::end_to_end::{khronos_errors, scratch_dir};
+use tryon_pipeline::kimono::{KimonoError, Wearer, fit_kimono, write_kimono};
+
+/// Wearers the family was not built from (its targets are in `kimono::family::TARGETS`).
+const UNSEEN: [[f64; 4]; 5] = [
+    [1.50, 0.82, 0.64, 0.88],
+    [1.57, 0.88, 0.70, 0.96],
+    [1.62, 0.84, 0.64, 0.90],
+    [1.68, 0.94, 0.76, 1.02],
+    [1.75, 0.90, 0.70, 0.97],
+];
+
+#[test]
+fn unseen_wearers_fit_within_the_issues_bounds_and_the_print_is_corrected() {
+    for m in UNSEEN {
+        let w = Wearer::new(m[0], m[1], m[2], m[3]);
+        let k = fit_kimono(&w).unwrap_or_else(|e| panic!("{m:?}: {e}"));
+        let r = &k.report;
+        assert_eq!(r.dimensions.len(), 17);
+        assert!(r.mean_rel_error <= 0.01, "{m:?}: mean {}", r.mean_rel_error);
+        assert!(r.max_rel_error <= 0.03, "{m:?}: max {}", r.max_rel_error);
+        assert!(r.mean_rel_error < r.initial_mean_rel_error, "{m:?}");
+        let (before, after) = (r.print.before[0], r.print.after[0]);
+        assert!(
+            after < before && after < 1.04,
+            "{m:?}: aspect {before} -> {after}"
+        );
+        assert!(
+            (r.print.after[1] - 1.0).abs() < 0.015,
+            "{m:?}: scale {}",
+            r.print.after[1]
+        );
+    }
+}
+
+#[test]
+fn the_outputs_read_back_and_the_glb_passes_the_validator() {
+    let dir = scratch_dir("kimono");
+    let k = fit_kimono(&Wearer::new(1.62, 0.84, 0.64, 0.90)).unwrap();
+    write_kimono(&dir, &k, (120, 140)).unwrap();
+    for f in ["before.png", "after.png"] {
+        let d = png::Decoder::new(std::io::BufReader::new(
+            std::fs::File::open(dir.join(f)).unwrap(),
+        ));
+        let r = d.read_info().unwrap();
+        assert_eq!((r.info().width, r.info().height), (120, 140), "{f}");
+    }
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("fit.json")).unwrap()).unwrap();
+    let dims = json["dimensions"].as_array().unwrap();
+    assert_eq!(dims.len(), 17);
+    assert_eq!(dims[0]["name"], "right sleeve length");
+    for d in dims {
+        for key in ["target_m", "initial_m", "fitted_m", "rel_error"] {
+            assert!(d[key].as_f64().is_some_and(f64::is_finite), "{key} in {d}");
+        }
+    }
+    let text = khronos_errors(&dir.join("kimono.glb"));
+    assert!(text.contains(": 0 errors"), "{text}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_measurement_out_of_range_is_named() {
+    let e = fit_kimono(&Wearer::new(1.62, 0.84, 0.64, 1.5)).unwrap_err();
+    assert!(matches!(e, KimonoError::Measurements(_)));
+    assert!(e.to_string().contains("`hip` = 1.5"), "{e}");
+}
