@@ -3,7 +3,8 @@
 //! blended mesh `base + sum_k w_k (target_k - base)`; then the sub-meshes moved in 3D so they meet.
 //!
 //! Choices the paper leaves open, made here: lambda_j = 1 / d_j^2 (so the terms are relative
-//! errors); each weight within [`FitParams::bounds`]; a small ridge term `ridge * |W|^2` so that a
+//! errors); each weight within [`FitParams::bounds`]; a ridge term `ridge * |W - W_prior|^2` (the prior
+//! 0 for the back, fitted first, and the back's weights for every other sub-mesh) so that a
 //! sub-mesh with fewer dimensions than targets changes no more than it must; solved by projected
 //! Gauss-Newton with Levenberg-Marquardt damping. The sub-meshes meet by moving each, in the order
 //! back, fronts, sleeves, collar, by the mean gap to the ones already placed at the vertices they
@@ -30,7 +31,7 @@ impl Default for FitParams {
     fn default() -> Self {
         FitParams {
             bounds: (-0.5, 1.5),
-            ridge: 1e-6,
+            ridge: 1e-3,
             iterations: 50,
         }
     }
@@ -107,7 +108,14 @@ pub fn fit(
             .filter(|&k| owner[k] == s)
             .map(|k| (k, table[mesh.dimensions[k].table_index].1))
             .collect();
-        let w = solve(mesh, &model, targets.len(), &sets, p);
+        // The back, fitted first to the garment's length and widths, is every other sub-mesh's
+        // prior: a part changes from the back's blend only as far as its own dimensions ask.
+        let prior = if s == sub::BACK {
+            vec![0.0; targets.len()]
+        } else {
+            weights[sub::BACK as usize].clone()
+        };
+        let w = solve(mesh, &model, &prior, &sets, p);
         model.place(&verts[s as usize], &w, &mut out, &mut placed);
         weights[s as usize] = w;
     }
@@ -310,8 +318,13 @@ fn residuals(sets: &[EdgeBasis], w: &[Real]) -> (DVector<Real>, DMatrix<Real>) {
     (r, jac)
 }
 
-fn cost(r: &DVector<Real>, w: &[Real], ridge: Real) -> Real {
-    r.norm_squared() + ridge * w.iter().map(|x| x * x).sum::<Real>()
+fn cost(r: &DVector<Real>, w: &[Real], prior: &[Real], ridge: Real) -> Real {
+    r.norm_squared()
+        + ridge
+            * w.iter()
+                .zip(prior)
+                .map(|(x, p)| (x - p) * (x - p))
+                .sum::<Real>()
 }
 
 /// The weights of one sub-mesh (its positions `model`) whose dimension sets are `sets` (index,
@@ -319,11 +332,12 @@ fn cost(r: &DVector<Real>, w: &[Real], ridge: Real) -> Real {
 fn solve(
     mesh: &KimonoMesh,
     model: &Affine,
-    k: usize,
+    prior: &[Real],
     sets: &[(usize, Real)],
     p: &FitParams,
 ) -> Vec<Real> {
-    let mut w = vec![0.0; k];
+    let k = prior.len();
+    let mut w = prior.to_vec();
     if sets.is_empty() {
         return w;
     }
@@ -342,10 +356,11 @@ fn solve(
         .collect();
     let (lo, hi) = p.bounds;
     let (mut r, mut jac) = residuals(&basis, &w);
-    let mut c = cost(&r, &w, p.ridge);
+    let mut c = cost(&r, &w, prior, p.ridge);
     let mut damping = 1e-3;
     for _ in 0..p.iterations {
-        let g = jac.transpose() * &r + DVector::from_column_slice(&w) * p.ridge;
+        let g = jac.transpose() * &r
+            + (DVector::from_column_slice(&w) - DVector::from_column_slice(prior)) * p.ridge;
         let mut h = jac.transpose() * &jac;
         for t in 0..k {
             h[(t, t)] += p.ridge + damping * (1.0 + h[(t, t)]);
@@ -356,7 +371,7 @@ fn solve(
         };
         let trial: Vec<Real> = (0..k).map(|t| (w[t] + step[t]).clamp(lo, hi)).collect();
         let (r2, j2) = residuals(&basis, &trial);
-        let c2 = cost(&r2, &trial, p.ridge);
+        let c2 = cost(&r2, &trial, prior, p.ridge);
         if c2.is_finite() && c2 < c {
             let gain = c - c2;
             (w, r, jac, c) = (trial, r2, j2, c2);
