@@ -41,7 +41,7 @@ pub struct Wearer {
 
 impl Wearer {
     /// A wearer from the four measurements, the rest by default.
-    pub fn new(height: Real, bust: Real, waist: Real, hip: Real) -> Self {
+    pub const fn new(height: Real, bust: Real, waist: Real, hip: Real) -> Self {
         Wearer {
             height,
             bust,

@@ -9,35 +9,24 @@ use thiserror::Error;
 use tryon_core::math::{Real, Vec3};
 
 /// The initial shape's wearer: a medium figure.
-pub const BASE: Wearer = size(1.58, 0.84, 0.66, 0.92);
+pub const BASE: Wearer = Wearer::new(1.58, 0.84, 0.66, 0.92);
 
 /// The ten target shapes' wearers: heights 1.48–1.78 m, slim to full.
 pub const TARGETS: [Wearer; 10] = [
-    size(1.48, 0.80, 0.62, 0.86),
-    size(1.52, 0.84, 0.66, 0.90),
-    size(1.55, 0.90, 0.72, 0.94),
-    size(1.58, 0.80, 0.60, 0.86),
-    size(1.60, 0.96, 0.80, 1.00),
-    size(1.63, 0.86, 0.66, 0.92),
-    size(1.66, 0.92, 0.74, 0.98),
-    size(1.70, 0.88, 0.68, 0.94),
-    size(1.74, 1.00, 0.84, 1.06),
-    size(1.78, 0.92, 0.72, 1.00),
+    Wearer::new(1.48, 0.80, 0.62, 0.86),
+    Wearer::new(1.52, 0.84, 0.66, 0.90),
+    Wearer::new(1.55, 0.90, 0.72, 0.94),
+    Wearer::new(1.58, 0.80, 0.60, 0.86),
+    Wearer::new(1.60, 0.96, 0.80, 1.00),
+    Wearer::new(1.63, 0.86, 0.66, 0.92),
+    Wearer::new(1.66, 0.92, 0.74, 0.98),
+    Wearer::new(1.70, 0.88, 0.68, 0.94),
+    Wearer::new(1.74, 1.00, 0.84, 1.06),
+    Wearer::new(1.78, 0.92, 0.72, 1.00),
 ];
 
 /// Edge length of the family's layout on the initial shape, m.
 pub const EDGE: Real = 0.03;
-
-const fn size(height: Real, bust: Real, waist: Real, hip: Real) -> Wearer {
-    Wearer {
-        height,
-        bust,
-        waist,
-        hip,
-        yuki: None,
-        sleeve_length: None,
-    }
-}
 
 /// Why the family cannot be built.
 #[derive(Debug, Error, Clone, PartialEq)]
