@@ -445,6 +445,15 @@ fn tie(
             plan.push((p, t, g0, u, lay, *goal, *level, *e_row));
             held.push(v);
         }
+        let first = plan.len() - verts.len();
+        let widest = plan[first..]
+            .iter()
+            .map(|q| q.2)
+            .fold(0.0, Real::max)
+            .min(0.15);
+        for q in &mut plan[first..] {
+            q.2 = widest;
+        }
     }
     let handles: Vec<tryon_core::interact::Handle> = held
         .iter()
@@ -459,8 +468,15 @@ fn tie(
         tryon_pipeline::build::solver(&scene, garment, handles, &[], &[], &[]).expect("solver");
     let dt = 1.0 / 30.0;
     let mut steps = 0;
-    for f in 1..=frames + 20 {
-        let tau = smoothstep((f as Real / frames as Real).min(1.0));
+    let mut progress = 0.0;
+    let mut lag = 0.0;
+    let mut f = 0;
+    while f < 4 * frames && !(progress >= 1.0 && f > frames + 20 && lag < 0.005) {
+        f += 1;
+        if lag < 0.01 {
+            progress = (progress + 1.0 / frames as Real).min(1.0);
+        }
+        let tau = smoothstep(progress);
         let targets: Vec<Vec3> = plan
             .iter()
             .map(|&(p, ts, gs, u, lay, goal, level, e_row)| {
@@ -468,7 +484,7 @@ fn tie(
                 let e_end = section(m, level.unwrap_or(goal), grow_end);
                 let t1 = angle_at_arc(e_end, u);
                 let y = p.y + (goal - p.y) * tau;
-                let g = gs + (grow_end - gs) * tau;
+                let g = gs + lay * layer + (grow_end - gs - lay * layer) * tau;
                 let e = section(m, level.unwrap_or(y), g);
                 ring_point(e, y, ts + (t1 - ts) * tau)
             })
@@ -477,7 +493,22 @@ fn tie(
         let t0 = std::time::Instant::now();
         let rep = solver.step_frame(frame, dt, collider);
         steps += 1;
+        lag = held
+            .iter()
+            .zip(&targets)
+            .map(|(&v, t)| (frame.positions[v as usize] - t).norm())
+            .sum::<Real>()
+            / held.len().max(1) as Real;
         if f % 20 == 0 {
+            for (k, (&v, t)) in held.iter().zip(&targets).enumerate() {
+                let e = (frame.positions[v as usize] - t).norm();
+                if e > 0.05 {
+                    eprintln!(
+                        "  stuck {k} vertex {v} by {e:.3}: at {:.3?} target {:.3?}",
+                        frame.positions[v as usize], t
+                    );
+                }
+            }
             let errs: Vec<Real> = held
                 .iter()
                 .zip(&targets)
