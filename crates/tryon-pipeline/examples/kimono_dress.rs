@@ -464,6 +464,11 @@ fn tie(
         .collect();
     let mut scene = scene.clone();
     scene.effects.self_collision = std::env::var("NOSELF").is_err();
+    let soft: Real = std::env::var("ANCHOR")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(0.0);
+    let handles = if soft > 0.0 { Vec::new() } else { handles };
     let mut solver =
         tryon_pipeline::build::solver(&scene, garment, handles, &[], &[], &[]).expect("solver");
     let dt = 1.0 / 30.0;
@@ -473,7 +478,7 @@ fn tie(
     let mut f = 0;
     while f < 4 * frames && !(progress >= 1.0 && f > frames + 20 && lag < 0.005) {
         f += 1;
-        if lag < 0.01 {
+        if lag < 0.01 || soft > 0.0 {
             progress = (progress + 1.0 / frames as Real).min(1.0);
         }
         let tau = smoothstep(progress);
@@ -489,7 +494,11 @@ fn tie(
                 ring_point(e, y, ts + (t1 - ts) * tau)
             })
             .collect();
-        solver.hold_handles(0, &targets);
+        if soft > 0.0 {
+            solver.anchor(&held, &targets, soft);
+        } else {
+            solver.hold_handles(0, &targets);
+        }
         let t0 = std::time::Instant::now();
         let rep = solver.step_frame(frame, dt, collider);
         steps += 1;

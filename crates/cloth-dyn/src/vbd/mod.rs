@@ -134,6 +134,8 @@ pub struct VbdSim {
     blocks: Vec<[u32; 2]>,
     /// Per block, a pair's ring (empty for a vertex alone) and its target offset for this step.
     rings: Vec<pairs::Ring>,
+    /// Soft holds: per particle, a point it is drawn to and the spring's stiffness (N/m).
+    anchors: Vec<Option<(Vec3, Real)>>,
     targets: Vec<Vec3>,
     /// Blocks in colour order and each colour's range.
     order: Vec<u32>,
@@ -247,6 +249,7 @@ impl VbdSim {
             targets: vec![Vec3::zeros(); blocks.len()],
             blocks,
             rings,
+            anchors: Vec::new(),
             order,
             colours,
             thickness,
@@ -383,6 +386,10 @@ impl VbdSim {
             add_outer(&mut o, s, &d);
         }
         self.hinges.add(i, &mut f, &mut o);
+        if let Some(Some((p, k))) = self.anchors.get(i) {
+            f += (p - xi) * *k;
+            iso += k;
+        }
         let kp = pokes::POKE_OVER_CONTACT * self.penalty(i);
         let tris = &self.model.triangles;
         self.pokes
@@ -581,6 +588,15 @@ impl ClothSolver for VbdSim {
 
     fn hold_handles(&mut self, first: usize, targets: &[Vec3]) {
         self.model.hold_handles(first, targets)
+    }
+
+    fn anchor(&mut self, particles: &[u32], targets: &[Vec3], stiffness: Real) {
+        self.anchors.resize(self.model.particle_count(), None);
+        for (&i, p) in particles.iter().zip(targets) {
+            if let Some(a) = self.anchors.get_mut(i as usize) {
+                *a = (stiffness > 0.0 && tryon_core::math::is_finite(p)).then_some((*p, stiffness));
+            }
+        }
     }
 
     fn grab(&mut self, handle: Handle) {
