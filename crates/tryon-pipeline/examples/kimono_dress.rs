@@ -148,6 +148,78 @@ fn dress_one(
             }
         })
         .collect();
+    // With ZFOLD, the ohashori is folded in the flat start: the skirt hangs from the band's head
+    // level, the band's lower half goes down inside it, its upper half comes up outside, each a
+    // layer further out; the left front's whole stack outside the right front's.
+    let zfold = std::env::var("ZFOLD").is_ok();
+    let lv = kimono::Levels::new(&d).expect("levels");
+    let hem_flat = top_body + 0.012 - top_k;
+    let (cord_h, band_h) = (lv.outer[2], lv.outer[3]);
+    let t0 = 0.5 * (band_h - cord_h);
+    let yc = hem_flat + band_h;
+    let mut start_pos = start_pos;
+    if zfold {
+        use kimono::mesh::sub;
+        let subs = base.sub_mesh_vertices();
+        let in_sub = |k: u8, v: u32| subs[k as usize].binary_search(&v).is_ok();
+        let front = |w: u32| {
+            !in_sub(sub::COLLAR, w) && (in_sub(sub::LEFT_FRONT, w) || in_sub(sub::RIGHT_FRONT, w))
+        };
+        let delta = 0.004;
+        for v in 0..rest.len() as u32 {
+            let p = rest[v as usize];
+            let h = p.y - hem_flat;
+            let out = if p.z < zc { -1.0 } else { 1.0 };
+            let left = out > 0.0
+                && (if front(v) {
+                    in_sub(sub::LEFT_FRONT, v)
+                } else {
+                    (0..rest.len() as u32)
+                        .filter(|&w| front(w))
+                        .min_by(|&a, &b| {
+                            (rest[a as usize] - p)
+                                .norm()
+                                .total_cmp(&(rest[b as usize] - p).norm())
+                        })
+                        .is_some_and(|w| in_sub(sub::LEFT_FRONT, w))
+                });
+            let (y, layer) = if h > band_h + 1e-6 {
+                (p.y, 0.0)
+            } else if h >= cord_h + t0 {
+                (yc - (band_h - h), 2.0)
+            } else if h > cord_h {
+                (yc - (h - cord_h), 1.0)
+            } else {
+                (yc - (cord_h - h), 0.0)
+            };
+            let extra = if left { 3.0 * delta } else { 0.0 };
+            let q = &mut start_pos[v as usize];
+            q.y = y;
+            let seam = (p.z - zc).abs() < 0.5 * kimono::mesh::GAP;
+            if h <= band_h + 1e-6 && !(in_sub(sub::RIGHT_SLEEVE, v) || in_sub(sub::LEFT_SLEEVE, v))
+            {
+                if seam {
+                    // A side seam, the tube's edge in the flat layout: outward is sideways.
+                    q.x += p.x.signum() * layer * delta;
+                } else {
+                    q.z += out * (layer * delta) + extra;
+                }
+            } else if left {
+                q.z += extra;
+            }
+        }
+    }
+    // The rows the fold hangs from, held up (not sideways) while the body grows.
+    let band_rows: Vec<u32> = if zfold {
+        (0..rest.len() as u32)
+            .filter(|&v| {
+                let h = rest[v as usize].y - hem_flat;
+                (h - cord_h).abs() < 0.016 || (h - band_h).abs() < 0.016
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
     eprintln!(
         "body top {top_body:.3} zc {zc:.3}; kimono y {:.3}..{:.3}",
         rest.iter().map(|v| v.y).fold(9.0, Real::min),
@@ -185,6 +257,29 @@ fn dress_one(
     let start = tryon_pipeline::crossings::crossings(&start_pos, &base.triangles).len();
     let inside = tpose.len();
     eprintln!("start crossings {start}; body vertices {inside}");
+    if zfold {
+        let mut tally: Vec<(String, usize)> = Vec::new();
+        for [a, b] in tryon_pipeline::crossings::crossings(&start_pos, &base.triangles) {
+            let (ta, tb) = (base.triangles[a as usize], base.triangles[b as usize]);
+            let hy = |t: [u32; 3]| (rest[t[0] as usize].y - hem_flat - cord_h) * 100.0;
+            let key = format!(
+                "{:?}/{:?} {:.0}/{:.0}",
+                base.part[a as usize],
+                base.part[b as usize],
+                hy(ta),
+                hy(tb)
+            );
+            match tally.iter_mut().find(|e| e.0 == key) {
+                Some(e) => e.1 += 1,
+                None => tally.push((key, 1)),
+            }
+        }
+        tally.sort_by(|a, b| b.1.cmp(&a.1));
+        eprintln!(
+            "start crossings by parts (cm above the cord): {:?}",
+            &tally[..tally.len().min(25)]
+        );
+    }
     let clock = std::time::Instant::now();
     let mut steps = 0usize;
     let mut frame = CoarseFrame::at_rest(start_pos.clone());
@@ -211,6 +306,16 @@ fn dress_one(
                 solver = x;
                 eprintln!("fold line let go at frame {f}");
             }
+        }
+        if !band_rows.is_empty() {
+            let up: Vec<Vec3> = band_rows
+                .iter()
+                .map(|&v| {
+                    let p = frame.positions[v as usize];
+                    Vec3::new(p.x, yc, p.z)
+                })
+                .collect();
+            solver.anchor(&band_rows, &up, 2e3);
         }
         let t0 = std::time::Instant::now();
         let rep = solver.step_frame(&mut frame, dt, collider.as_mut());
