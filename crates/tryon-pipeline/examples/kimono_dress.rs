@@ -166,32 +166,65 @@ fn dress_one(
             !in_sub(sub::COLLAR, w) && (in_sub(sub::LEFT_FRONT, w) || in_sub(sub::RIGHT_FRONT, w))
         };
         let delta = 0.004;
-        for v in 0..rest.len() as u32 {
-            let p = rest[v as usize];
-            let h = p.y - hem_flat;
-            let out = if p.z < zc { -1.0 } else { 1.0 };
-            let left = out > 0.0
-                && (if front(v) {
-                    in_sub(sub::LEFT_FRONT, v)
-                } else {
-                    (0..rest.len() as u32)
-                        .filter(|&w| front(w))
-                        .min_by(|&a, &b| {
-                            (rest[a as usize] - p)
-                                .norm()
-                                .total_cmp(&(rest[b as usize] - p).norm())
-                        })
-                        .is_some_and(|w| in_sub(sub::LEFT_FRONT, w))
-                });
-            let (y, layer) = if h > band_h + 1e-6 {
-                (p.y, 0.0)
+        // Each vertex's side: the fronts' own, the rest (collar, over-collar) by the nearest front
+        // vertex along the mesh (a flood from the fronts).
+        let n = rest.len();
+        let mut label: Vec<Option<(bool, u32)>> = (0..n as u32)
+            .map(|v| front(v).then(|| (in_sub(sub::LEFT_FRONT, v), v)))
+            .collect();
+        let mut adj = vec![Vec::new(); n];
+        for t in &base.triangles {
+            for e in 0..3 {
+                adj[t[e] as usize].push(t[(e + 1) % 3]);
+                adj[t[(e + 1) % 3] as usize].push(t[e]);
+            }
+        }
+        let mut queue: std::collections::VecDeque<u32> = (0..n as u32)
+            .filter(|&v| label[v as usize].is_some())
+            .collect();
+        while let Some(v) = queue.pop_front() {
+            let l = label[v as usize];
+            for &w in &adj[v as usize] {
+                if label[w as usize].is_none() && in_sub(sub::COLLAR, w) {
+                    label[w as usize] = l;
+                    queue.push_back(w);
+                }
+            }
+        }
+        let side_left: Vec<bool> = label.iter().map(|l| l.is_some_and(|l| l.0)).collect();
+        // A collar vertex moves with the front vertex it was reached from.
+        let source: Vec<u32> = (0..n as u32)
+            .map(|v| match label[v as usize] {
+                Some((_, s)) if in_sub(sub::COLLAR, v) => s,
+                _ => v,
+            })
+            .collect();
+        let map = |h: Real, py: Real| -> (Real, Real) {
+            if h > band_h + 1e-6 {
+                (py, 0.0)
             } else if h >= cord_h + t0 {
                 (yc - (band_h - h), 2.0)
             } else if h > cord_h {
                 (yc - (h - cord_h), 1.0)
             } else {
                 (yc - (cord_h - h), 0.0)
-            };
+            }
+        };
+        for v in 0..rest.len() as u32 {
+            let p = rest[v as usize];
+            let h = p.y - hem_flat;
+            let out = if p.z < zc { -1.0 } else { 1.0 };
+            let left = out > 0.0 && side_left[v as usize];
+            if in_sub(sub::RIGHT_SLEEVE, v) || in_sub(sub::LEFT_SLEEVE, v) {
+                if left {
+                    start_pos[v as usize].z += 3.0 * delta;
+                }
+                continue;
+            }
+            let src = rest[source[v as usize] as usize];
+            let (ys, layer) = map(src.y - hem_flat, src.y);
+            let y = p.y + (ys - src.y);
+            let h = src.y - hem_flat;
             let extra = if left { 3.0 * delta } else { 0.0 };
             let q = &mut start_pos[v as usize];
             q.y = y;
@@ -257,7 +290,7 @@ fn dress_one(
     let start = tryon_pipeline::crossings::crossings(&start_pos, &base.triangles).len();
     let inside = tpose.len();
     eprintln!("start crossings {start}; body vertices {inside}");
-    if zfold {
+    {
         let mut tally: Vec<(String, usize)> = Vec::new();
         for [a, b] in tryon_pipeline::crossings::crossings(&start_pos, &base.triangles) {
             let (ta, tb) = (base.triangles[a as usize], base.triangles[b as usize]);
