@@ -24,24 +24,25 @@ fn kimono(c: &mut Criterion) {
     });
     group.bench_function("print", |b| {
         b.iter(|| {
-            std::hint::black_box(correct_print(
-                base,
-                &base.positions,
-                &fitted.positions,
-                &PrintParams::default(),
-            ))
+            std::hint::black_box(
+                correct_print(
+                    base,
+                    &base.positions,
+                    &fitted.positions,
+                    &PrintParams::default(),
+                )
+                .expect("shapes of the mesh"),
+            )
         })
     });
     group.bench_function("both", |b| {
         b.iter(|| {
             let f =
                 fit(base, &base.positions, &fam.targets, &d, &p).unwrap_or_else(|e| panic!("{e}"));
-            std::hint::black_box(correct_print(
-                base,
-                &base.positions,
-                &f.positions,
-                &PrintParams::default(),
-            ))
+            std::hint::black_box(
+                correct_print(base, &base.positions, &f.positions, &PrintParams::default())
+                    .expect("shapes of the mesh"),
+            )
         })
     });
     group.finish();

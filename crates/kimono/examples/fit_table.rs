@@ -29,11 +29,14 @@ fn main() {
             &fam.base.positions,
             &f.positions,
             &kimono::PrintParams::default(),
-        );
+        )
+        .expect("shapes of the mesh");
         let ms = t0.elapsed().as_secs_f64() * 1e3;
-        let a0 = kimono::print_aspect(&fam.base, &fam.base.positions, &fam.base.uvs);
-        let a1 = kimono::print_aspect(&fam.base, &f.positions, &fam.base.uvs);
-        let a2 = kimono::print_aspect(&fam.base, &f.positions, &uv);
+        let a0 = kimono::print_aspect(&fam.base, &fam.base.positions, &fam.base.uvs)
+            .expect("shapes of the mesh");
+        let a1 = kimono::print_aspect(&fam.base, &f.positions, &fam.base.uvs)
+            .expect("shapes of the mesh");
+        let a2 = kimono::print_aspect(&fam.base, &f.positions, &uv).expect("shapes of the mesh");
         println!(
             "  aspect initial {:.4}/{:.4}  fitted before {:.4}/{:.4}  after {:.4}/{:.4}",
             a0.mean, a0.scale, a1.mean, a1.scale, a2.mean, a2.scale

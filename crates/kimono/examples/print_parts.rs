@@ -10,22 +10,26 @@ fn main() {
     let d = tailor(&w).expect("tailor");
     let k = &fam.base;
     let f = fit(k, &k.positions, &fam.targets, &d, &FitParams::default()).expect("fit");
-    let uv = correct_print(k, &k.positions, &f.positions, &PrintParams::default());
+    let uv = correct_print(k, &k.positions, &f.positions, &PrintParams::default())
+        .expect("shapes of the mesh");
     let stretched: Vec<_> = k
         .positions
         .iter()
         .map(|p| tryon_core::math::Vec3::new(p.x * 1.03, p.y * 1.12, p.z))
         .collect();
-    let uvs = correct_print(k, &k.positions, &stretched, &PrintParams::default());
+    let uvs = correct_print(k, &k.positions, &stretched, &PrintParams::default())
+        .expect("shapes of the mesh");
     let (b, a) = (
-        print_aspect(k, &stretched, &k.uvs),
-        print_aspect(k, &stretched, &uvs),
+        print_aspect(k, &stretched, &k.uvs).expect("shapes of the mesh"),
+        print_aspect(k, &stretched, &uvs).expect("shapes of the mesh"),
     );
     println!(
         "stretched 1.03 x 1.12: before {:.4} after {:.4} (initial {:.4})",
         b.mean,
         a.mean,
-        print_aspect(k, &k.positions, &k.uvs).mean
+        print_aspect(k, &k.positions, &k.uvs)
+            .expect("shapes of the mesh")
+            .mean
     );
     for part in [
         Part::LeftBody,
@@ -41,9 +45,9 @@ fn main() {
         m.triangles = keep.iter().map(|&t| k.triangles[t]).collect();
         m.uv_triangles = keep.iter().map(|&t| k.uv_triangles[t]).collect();
         let (a0, a1, a2) = (
-            print_aspect(&m, &k.positions, &k.uvs),
-            print_aspect(&m, &f.positions, &k.uvs),
-            print_aspect(&m, &f.positions, &uv),
+            print_aspect(&m, &k.positions, &k.uvs).expect("shapes of the mesh"),
+            print_aspect(&m, &f.positions, &k.uvs).expect("shapes of the mesh"),
+            print_aspect(&m, &f.positions, &uv).expect("shapes of the mesh"),
         );
         println!(
             "{part:?}: initial {:.4}, fitted before {:.4} after {:.4} (scale {:.4})",

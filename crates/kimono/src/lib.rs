@@ -25,4 +25,4 @@ pub use dims::{Dimensions, TABLE_1, TailorError, Wearer, tailor};
 pub use fit::{Fit, FitError, FitParams, blend, fit};
 pub use levels::{Layout, LevelError, Levels};
 pub use mesh::{DimensionSet, KimonoMesh, Part, build};
-pub use print::{PrintAspect, PrintParams, correct_print, print_aspect};
+pub use print::{PrintAspect, PrintError, PrintParams, correct_print, print_aspect};

@@ -78,11 +78,19 @@ pub struct KimonoMesh {
 
 impl KimonoMesh {
     /// The length of dimension set `k` on `positions`.
+    /// NaN when `k` names no set or an edge's vertex is missing from `positions`.
     pub fn measure(&self, k: usize, positions: &[Vec3]) -> Real {
-        self.dimensions[k]
-            .edges
+        let Some(set) = self.dimensions.get(k) else {
+            return Real::NAN;
+        };
+        set.edges
             .iter()
-            .map(|&[a, b]| (positions[a as usize] - positions[b as usize]).norm())
+            .map(
+                |&[a, b]| match (positions.get(a as usize), positions.get(b as usize)) {
+                    (Some(p), Some(q)) => (p - q).norm(),
+                    _ => Real::NAN,
+                },
+            )
             .sum()
     }
 

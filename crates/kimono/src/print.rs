@@ -21,7 +21,52 @@
 
 use crate::mesh::KimonoMesh;
 use nalgebra::{Matrix2, Vector2};
+use thiserror::Error;
 use tryon_core::math::{Real, Vec3};
+
+/// Why the print could not be corrected or measured: a shape or UV set handed in does not belong
+/// to the mesh.
+#[derive(Debug, Error, PartialEq)]
+#[non_exhaustive]
+pub enum PrintError {
+    #[error("{what} has {found} entries, the kimono mesh has {expected}")]
+    Count {
+        what: &'static str,
+        found: usize,
+        expected: usize,
+    },
+    #[error("{what}, entry {index}: not finite")]
+    NonFinite { what: &'static str, index: usize },
+}
+
+fn check_points(what: &'static str, found: &[Vec3], expected: usize) -> Result<(), PrintError> {
+    if found.len() != expected {
+        return Err(PrintError::Count {
+            what,
+            found: found.len(),
+            expected,
+        });
+    }
+    match found.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
+        Some(index) => Err(PrintError::NonFinite { what, index }),
+        None => Ok(()),
+    }
+}
+
+fn check_uvs(uvs: &[[Real; 2]], expected: usize) -> Result<(), PrintError> {
+    let what = "the UVs";
+    if uvs.len() != expected {
+        return Err(PrintError::Count {
+            what,
+            found: uvs.len(),
+            expected,
+        });
+    }
+    match uvs.iter().position(|u| !u.iter().all(|c| c.is_finite())) {
+        Some(index) => Err(PrintError::NonFinite { what, index }),
+        None => Ok(()),
+    }
+}
 
 /// The weights of eq. (2).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -63,13 +108,16 @@ fn uv_rings(mesh: &KimonoMesh) -> Vec<Vec<u32>> {
     ring
 }
 
-/// The UVs of `mesh` corrected for its shape changing from `before` to `after`.
+/// The UVs of `mesh` corrected for its shape changing from `before` to `after` (each one position
+/// per vertex of `mesh`, finite).
 pub fn correct_print(
     mesh: &KimonoMesh,
     before: &[Vec3],
     after: &[Vec3],
     p: &PrintParams,
-) -> Vec<[Real; 2]> {
+) -> Result<Vec<[Real; 2]>, PrintError> {
+    check_points("the shape before", before, mesh.positions.len())?;
+    check_points("the shape after", after, mesh.positions.len())?;
     let uv0: Vec<Vector2<Real>> = mesh.uvs.iter().map(|u| Vector2::new(u[0], u[1])).collect();
     let mut uv = uv0.clone();
     let mut moved = vec![false; uv.len()];
@@ -141,7 +189,7 @@ pub fn correct_print(
             }
         }
     }
-    uv.iter().map(|u| [u.x, u.y]).collect()
+    Ok(uv.iter().map(|u| [u.x, u.y]).collect())
 }
 
 /// Step 1: each dimension set's UV edges scaled by the change of the set's 3D length, which is
@@ -336,8 +384,15 @@ pub struct PrintAspect {
     pub scale: Real,
 }
 
-/// The print's aspect on `positions` (3D) with `uvs` (bolt coordinates).
-pub fn print_aspect(mesh: &KimonoMesh, positions: &[Vec3], uvs: &[[Real; 2]]) -> PrintAspect {
+/// The print's aspect on `positions` (3D, one per vertex of `mesh`) with `uvs` (bolt coordinates,
+/// one per UV vertex of `mesh`).
+pub fn print_aspect(
+    mesh: &KimonoMesh,
+    positions: &[Vec3],
+    uvs: &[[Real; 2]],
+) -> Result<PrintAspect, PrintError> {
+    check_points("the positions", positions, mesh.positions.len())?;
+    check_uvs(uvs, mesh.uvs.len())?;
     let (mut sum, mut scale, mut area) = (0.0, 0.0, 0.0);
     for (t, ut) in mesh.triangles.iter().zip(&mesh.uv_triangles) {
         let x = t.map(|v| positions[v as usize]);
@@ -358,8 +413,8 @@ pub fn print_aspect(mesh: &KimonoMesh, positions: &[Vec3], uvs: &[[Real; 2]]) ->
         scale += w * 0.5 * (a + b);
         area += w;
     }
-    PrintAspect {
+    Ok(PrintAspect {
         mean: sum / area,
         scale: scale / area,
-    }
+    })
 }

@@ -104,7 +104,7 @@ fn uvs_lie_on_the_bolt_and_the_flat_print_is_square() {
         );
         assert!(uv[1] >= -1e-9, "{uv:?}");
     }
-    let a = print_aspect(k, &k.positions, &k.uvs);
+    let a = print_aspect(k, &k.positions, &k.uvs).expect("shapes of the mesh");
     assert!(a.mean < 1.01 && (a.scale - 1.0).abs() < 0.01, "{a:?}");
     // A vertex on a seam between parts has a UV on each side.
     assert!(k.uvs.len() > k.positions.len());
@@ -189,14 +189,56 @@ fn the_print_correction_restores_a_square_print() {
         .iter()
         .map(|p| Vec3::new(p.x * 1.03, p.y * 1.12, p.z))
         .collect();
-    let before = print_aspect(k, &after, &k.uvs);
-    let uv = correct_print(k, &k.positions, &after, &PrintParams::default());
-    let fixed = print_aspect(k, &after, &uv);
+    let before = print_aspect(k, &after, &k.uvs).expect("shapes of the mesh");
+    let uv = correct_print(k, &k.positions, &after, &PrintParams::default())
+        .expect("shapes of the mesh");
+    let fixed = print_aspect(k, &after, &uv).expect("shapes of the mesh");
     assert!(before.mean > 1.07, "{before:?}");
     assert!(
         fixed.mean < 1.03 && (fixed.scale - 1.0).abs() < 0.015,
         "{fixed:?} (before {before:?})"
     );
+}
+
+#[test]
+fn shapes_that_are_not_the_meshs_are_errors_not_panics() {
+    let k = &family().base;
+    let n = k.positions.len();
+    let short = &k.positions[..n - 1];
+    let p = PrintParams::default();
+    assert_eq!(
+        correct_print(k, short, &k.positions, &p),
+        Err(PrintError::Count {
+            what: "the shape before",
+            found: n - 1,
+            expected: n
+        })
+    );
+    let mut bad = k.positions.clone();
+    bad[7].y = Real::NAN;
+    assert_eq!(
+        correct_print(k, &k.positions, &bad, &p),
+        Err(PrintError::NonFinite {
+            what: "the shape after",
+            index: 7
+        })
+    );
+    assert!(matches!(
+        print_aspect(k, short, &k.uvs),
+        Err(PrintError::Count { .. })
+    ));
+    assert!(matches!(
+        print_aspect(k, &k.positions, &k.uvs[1..]),
+        Err(PrintError::Count {
+            what: "the UVs",
+            ..
+        })
+    ));
+    let msg = print_aspect(k, &bad, &k.uvs).unwrap_err().to_string();
+    assert_eq!(msg, "the positions, entry 7: not finite");
+    assert!(k.measure(0, short.get(..3).unwrap()).is_nan());
+    assert!(k.measure(k.dimensions.len(), &k.positions).is_nan());
+    assert!(k.measure(0, &k.positions) > 0.0);
 }
 
 proptest! {

@@ -20,8 +20,18 @@ pub struct Texture {
 }
 
 impl Texture {
-    /// The colour at `uv`, the texture repeating (nearest texel; v runs down the picture).
+    /// Whether the texture holds its `width` x `height` texels (neither 0) and a positive tile.
+    pub fn is_valid(&self) -> bool {
+        let texels = (self.width as usize).checked_mul(self.height as usize);
+        texels.is_some_and(|n| n > 0 && n.checked_mul(3) == Some(self.rgb.len())) && self.tile > 0.0
+    }
+
+    /// The colour at `uv`, the texture repeating (nearest texel; v runs down the picture). A
+    /// texture that is not valid ([`Texture::is_valid`]) samples as mid grey everywhere.
     pub fn sample(&self, uv: [Real; 2]) -> [u8; 3] {
+        if !self.is_valid() {
+            return [128; 3];
+        }
         let (w, h) = (self.width as usize, self.height as usize);
         let f = |t: Real, n: usize| {
             let t = (t / self.tile).rem_euclid(1.0);
@@ -75,11 +85,7 @@ fn validate(m: &TexturedMesh, t: &Texture) -> Result<(), TexturedError> {
             m.positions.len()
         ));
     }
-    if t.width == 0
-        || t.height == 0
-        || t.rgb.len() != 3 * (t.width * t.height) as usize
-        || !(t.tile > 0.0)
-    {
+    if !t.is_valid() {
         return bad(format!(
             "texture {}x{} with {} bytes, tile {}",
             t.width,

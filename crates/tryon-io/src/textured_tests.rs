@@ -48,6 +48,52 @@ fn the_texture_repeats_and_samples_the_nearest_texel() {
 }
 
 #[test]
+fn a_texture_without_its_texels_samples_grey_instead_of_panicking() {
+    let good = checker();
+    let cases = [
+        Texture {
+            width: 0,
+            ..good.clone()
+        },
+        Texture {
+            height: 0,
+            ..good.clone()
+        },
+        Texture {
+            rgb: vec![1, 2, 3],
+            ..good.clone()
+        },
+        Texture {
+            width: u32::MAX,
+            height: u32::MAX,
+            ..good.clone()
+        },
+        Texture {
+            tile: 0.0,
+            ..good.clone()
+        },
+        Texture {
+            tile: Real::NAN,
+            ..good.clone()
+        },
+    ];
+    for t in &cases {
+        assert!(!t.is_valid(), "{}x{} tile {}", t.width, t.height, t.tile);
+        assert_eq!(t.sample([0.3, 0.7]), [128; 3]);
+    }
+    assert!(good.is_valid());
+    // Non-finite UVs land on a texel of a valid texture, not outside it.
+    for uv in [
+        [Real::NAN, 0.0],
+        [Real::INFINITY, Real::NEG_INFINITY],
+        [1e300, -1e300],
+    ] {
+        let c = good.sample(uv);
+        assert!(c == [250, 10, 10] || c == [10, 10, 250], "{uv:?} -> {c:?}");
+    }
+}
+
+#[test]
 fn the_glb_reads_back_with_its_uvs_and_embedded_png() {
     let (p, uv, tris) = square();
     let m = TexturedMesh {

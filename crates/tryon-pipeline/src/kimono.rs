@@ -24,6 +24,8 @@ pub enum KimonoError {
     Family(#[from] kimono::family::FamilyError),
     #[error("the fit: {0}")]
     Fit(#[from] kimono::FitError),
+    #[error("the print correction: {0}")]
+    Print(#[from] kimono::PrintError),
     #[error("{0}")]
     Output(String),
 }
@@ -103,7 +105,7 @@ pub fn fit_kimono(w: &Wearer) -> Result<KimonoFit, KimonoError> {
         &base.positions,
         &fit.positions,
         &PrintParams::default(),
-    );
+    )?;
     let print_ms = t1.elapsed().as_secs_f64() * 1e3;
     let table = dims.table();
     let rows: Vec<DimensionRow> = base
@@ -126,9 +128,9 @@ pub fn fit_kimono(w: &Wearer) -> Result<KimonoFit, KimonoError> {
         .collect();
     let n = rows.len() as Real;
     let print = PrintFigures {
-        initial: aspect(kimono::print_aspect(base, &base.positions, &base.uvs)),
-        before: aspect(kimono::print_aspect(base, &fit.positions, &base.uvs)),
-        after: aspect(kimono::print_aspect(base, &fit.positions, &uvs)),
+        initial: aspect(kimono::print_aspect(base, &base.positions, &base.uvs)?),
+        before: aspect(kimono::print_aspect(base, &fit.positions, &base.uvs)?),
+        after: aspect(kimono::print_aspect(base, &fit.positions, &uvs)?),
     };
     let report = FitReport {
         wearer: [
