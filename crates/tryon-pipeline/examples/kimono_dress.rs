@@ -20,6 +20,9 @@
 //! rings (16-19 cm on average at the end) and the hem stays low (and 17-78 crossings appear);
 //! with self-contact off the rows follow and 4,599 pairs cross.
 
+#[path = "kimono_parts/cord.rs"]
+mod cord;
+
 use body_model::Mannequin;
 use body_model::skin::SkinnedBody;
 use std::io::Write;
@@ -365,7 +368,43 @@ fn dress_one(
         .ok()
         .and_then(|s| s.parse().ok())
         .unwrap_or(60);
-    if tie_frames > 0 {
+    if std::env::var("CORD").is_ok() {
+        use kimono::mesh::sub;
+        let subs = base.sub_mesh_vertices();
+        let in_sub = |k: u8, v: u32| subs[k as usize].binary_search(&v).is_ok();
+        let torso: Vec<bool> = (0..rest.len() as u32)
+            .map(|v| !in_sub(sub::RIGHT_SLEEVE, v) && !in_sub(sub::LEFT_SLEEVE, v))
+            .collect();
+        let want = hem_flat + lv.outer[2];
+        let row: Vec<u32> = (0..rest.len() as u32)
+            .filter(|&v| {
+                torso[v as usize]
+                    && !in_sub(sub::COLLAR, v)
+                    && (rest[v as usize].y - want).abs() < 0.012
+            })
+            .collect();
+        eprintln!("cord row: {} vertices", row.len());
+        let job = cord::CordJob {
+            m: &m,
+            body: &prev,
+            body_triangles: &bt,
+            row: &row,
+            goal: lm.ankle + 0.01 + lv.outer[2],
+            torso: &torso,
+            thickness: scene.cloth.thickness,
+        };
+        let make = |h| {
+            tryon_pipeline::build::solver(&scene, &garment, h, &[], &[], &[]).expect("solver")
+        };
+        steps += cord::tie(
+            &job,
+            solver.as_mut(),
+            &mut frame,
+            tie_frames,
+            &scene.effects,
+            &make,
+        );
+    } else if tie_frames > 0 {
         let kept = (&rest[..], base, &d);
         steps += tie(
             &scene,
