@@ -39,7 +39,12 @@ pub enum PrintError {
     NonFinite { what: &'static str, index: usize },
 }
 
-fn check_points(what: &'static str, found: &[Vec3], expected: usize) -> Result<(), PrintError> {
+fn check<T>(
+    what: &'static str,
+    found: &[T],
+    expected: usize,
+    finite: impl Fn(&T) -> bool,
+) -> Result<(), PrintError> {
     if found.len() != expected {
         return Err(PrintError::Count {
             what,
@@ -47,25 +52,20 @@ fn check_points(what: &'static str, found: &[Vec3], expected: usize) -> Result<(
             expected,
         });
     }
-    match found.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
+    match found.iter().position(|x| !finite(x)) {
         Some(index) => Err(PrintError::NonFinite { what, index }),
         None => Ok(()),
     }
 }
 
+fn check_points(what: &'static str, found: &[Vec3], expected: usize) -> Result<(), PrintError> {
+    check(what, found, expected, |p| p.iter().all(|c| c.is_finite()))
+}
+
 fn check_uvs(uvs: &[[Real; 2]], expected: usize) -> Result<(), PrintError> {
-    let what = "the UVs";
-    if uvs.len() != expected {
-        return Err(PrintError::Count {
-            what,
-            found: uvs.len(),
-            expected,
-        });
-    }
-    match uvs.iter().position(|u| !u.iter().all(|c| c.is_finite())) {
-        Some(index) => Err(PrintError::NonFinite { what, index }),
-        None => Ok(()),
-    }
+    check("the UVs", uvs, expected, |u| {
+        u.iter().all(|c| c.is_finite())
+    })
 }
 
 /// The weights of eq. (2).

@@ -12,6 +12,11 @@ use tryon_core::pose::{Pose, Skeleton};
 pub const MAX_BVH_JOINTS: usize = 4096;
 /// Most channel values (frames x channels) a BVH may hold.
 pub const MAX_BVH_VALUES: usize = 100_000_000;
+/// The longest frame time read, s (0.1 frames a second).
+pub const MAX_BVH_FRAME_TIME: Real = 10.0;
+/// The largest channel value read, in the file's units or degrees: a rotation of 2,700 turns
+/// or a translation of a kilometre in millimetres is not motion capture.
+pub const MAX_BVH_CHANNEL: Real = 1e6;
 
 /// Known units (metres per file unit), with names for reports.
 pub const KNOWN_UNITS: [(Real, &str); 6] = [
@@ -202,10 +207,10 @@ pub fn parse_bvh(text: &str, file: &Path) -> Result<BvhFile, ReadError> {
     t.expect("Time:")?;
     let at = t.at();
     f.frame_time = t.real("the frame time")?;
-    if !(f.frame_time > 0.0) {
+    if !(f.frame_time > 0.0 && f.frame_time <= MAX_BVH_FRAME_TIME) {
         return Err(at.err(format!(
-            "the frame time must be positive, found {}",
-            f.frame_time
+            "the frame time must be positive and at most {MAX_BVH_FRAME_TIME} s, found {}",
+            short(f.frame_time)
         )));
     }
     let joints = f.skeleton.parents.len();
@@ -215,7 +220,15 @@ pub fn parse_bvh(text: &str, file: &Path) -> Result<BvhFile, ReadError> {
         pose.time = k as Real * f.frame_time;
         let mut pos = vec![Vec3::zeros(); joints];
         for &(j, ch) in &layout {
-            let v = t.real(&format!("channel value {} of frame {}", ch_name(ch), k + 1))?;
+            let at = t.at();
+            let what = format!("channel value {} of frame {}", ch_name(ch), k + 1);
+            let v = t.real(&what)?;
+            if v.abs() > MAX_BVH_CHANNEL {
+                return Err(at.err(format!(
+                    "{what}: {} is beyond the {MAX_BVH_CHANNEL:e} a channel may hold",
+                    short(v)
+                )));
+            }
             match ch {
                 Channel::Pos(a) => pos[j][a] = v,
                 Channel::Rot(a) => {
@@ -242,6 +255,15 @@ pub fn parse_bvh(text: &str, file: &Path) -> Result<BvhFile, ReadError> {
         }
     }
     Ok(f)
+}
+
+/// A number as a person reads it: exponent form when it is huge or tiny.
+fn short(v: Real) -> String {
+    if v != 0.0 && !(1e-4..1e6).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
 }
 
 fn ch_name(c: Channel) -> &'static str {
@@ -394,9 +416,24 @@ mod tests {
                 "positive",
             ),
             (
+                SMALL.replace("Frame Time: 0.0083333", "Frame Time: 1e300"),
+                18,
+                "at most 10 s",
+            ),
+            (
                 SMALL.replace("90 0 0\r\n1 20", "9e999 0 0\r\n1 20"),
                 19,
                 "finite",
+            ),
+            (
+                SMALL.replace("90 0 0\r\n1 20", "1e308 0 0\r\n1 20"),
+                19,
+                "beyond the 1e6",
+            ),
+            (
+                SMALL.replace("\r\n1 20 3 90", "\r\n1e300 20 3 90"),
+                20,
+                "channel value Xposition of frame 2",
             ),
             (SMALL.replace("JOINT Leg", "JOINT Hips"), 6, "twice"),
             (SMALL.replace("MOTION", "MOTON"), 16, "MOTION"),
