@@ -51,6 +51,8 @@ pub enum AssembleError {
     Refine(#[from] pnt_surface::RefineError),
     #[error("surface detail: {0}")]
     Detail(#[from] wrinkle::DetailError),
+    #[error("kimono: {0}")]
+    Kimono(#[from] crate::kimono::KimonoError),
     #[error("garments: {0}")]
     Wear(#[from] cloth_dyn::wear::WearError),
     #[error("[[fold]] {0}")]
@@ -106,6 +108,16 @@ pub(crate) struct BuiltBody {
     pub clip_len: Real,
     /// What retargeting a captured clip changed (`None` for other motions).
     pub retarget: Option<crate::run::RetargetStats>,
+    /// The body in the motion's first pose where that is not the rest pose (a kimono's lead-in):
+    /// the garment is placed against it and the collider starts from it.
+    pub start: Option<PolyMesh>,
+}
+
+impl BuiltBody {
+    /// The body the garment starts on.
+    pub fn start_mesh(&self) -> &PolyMesh {
+        self.start.as_ref().unwrap_or(&self.mesh)
+    }
 }
 
 /// A body that holds still at `mesh`.
@@ -121,6 +133,7 @@ fn fixed(mesh: PolyMesh, clip_len: Real) -> BuiltBody {
         makehuman: None,
         clip_len,
         retarget: None,
+        start: None,
     }
 }
 
@@ -155,6 +168,7 @@ pub(crate) fn body(scene: &Scene) -> Result<BuiltBody, AssembleError> {
                     motion: Some(Box::new(r)),
                     mesh,
                     makehuman: None,
+                    start: None,
                 }
             } else {
                 fixed(mesh, still.unwrap_or(2.0))
@@ -170,10 +184,15 @@ fn mannequin(scene: &Scene, spec: &MannequinBody) -> Result<BuiltBody, AssembleE
     let m = spec.measurements();
     let man = Mannequin::new(&m)?;
     let mut retarget = None;
+    let kimono = crate::kimono_wear::scene::spec(scene);
     let motion: Box<dyn MotionSource> = match &scene.motion {
-        MotionSection::Still(s) => {
+        MotionSection::Still(s) if kimono.is_none() => {
             return Ok(fixed(man.mesh, s.duration.unwrap_or(2.0)));
         }
+        MotionSection::Still(s) => Box::new(tryon_core::stages::StillMotion {
+            joints: man.skeleton.names.len(),
+            duration: s.duration.unwrap_or(2.0),
+        }),
         MotionSection::Walk(w) => Box::new(Walk::new(
             &man.skeleton,
             WalkParams {
@@ -204,22 +223,40 @@ fn mannequin(scene: &Scene, spec: &MannequinBody) -> Result<BuiltBody, AssembleE
             Box::new(r)
         }
     };
+    let motion = match kimono {
+        Some(k) => crate::kimono_wear::scene::lead_in(&man.skeleton, k, motion),
+        None => motion,
+    };
     let (tris, _) = man.mesh.triangulate();
     let clip_len = motion.duration();
-    let model = SkinnedBody::new(
-        man.mesh.positions.clone(),
-        tris,
-        man.skeleton,
-        man.joint_rest,
-        man.skin,
+    let model = press(
+        SkinnedBody::new(
+            man.mesh.positions.clone(),
+            tris,
+            man.skeleton,
+            man.joint_rest,
+            man.skin,
+        ),
+        scene,
     );
+    let start = kimono.map(|_| {
+        let mut first = tryon_core::pose::Pose::default();
+        motion.sample(0.0, &mut first);
+        let mut positions = Vec::new();
+        model.shape_at(&first, &mut positions);
+        PolyMesh {
+            positions,
+            faces: man.mesh.faces.clone(),
+        }
+    });
     Ok(BuiltBody {
         mesh: man.mesh,
-        model: Box::new(press(model, scene)),
+        model: Box::new(model),
         motion: Some(motion),
         makehuman: None,
         clip_len,
         retarget,
+        start,
     })
 }
 
@@ -316,6 +353,7 @@ pub fn garment_of(
             garment_fit::dress(&m, &p)?.mesh
         }
         GarmentSection::Shirt(g) => shirt(&m, g)?,
+        GarmentSection::Kimono(k) => crate::kimono_wear::scene::garment(&m, k)?,
         GarmentSection::Skirt(g) => {
             let p = SkirtParams {
                 ease: [g.ease[0], g.ease[1]],

@@ -110,7 +110,7 @@ pub(crate) fn dress(
     let mut pieces = vec![LayerPlacement::default(); meshes.len()];
     if collides {
         let thickness = scene.cloth.thickness;
-        let mut placer = ExactCollider::new(&body.mesh, thickness)?;
+        let mut placer = ExactCollider::new(body.start_mesh(), thickness)?;
         let gap = LAYER_GAP * scene.cloth.self_thickness;
         for (k, m) in meshes.iter_mut().enumerate() {
             placed_moved += garment_fit::place_outside(m, &mut placer);
