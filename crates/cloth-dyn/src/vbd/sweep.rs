@@ -23,9 +23,7 @@ impl VbdSim {
                 if v != pairs::ALONE && is_finite(dv) {
                     let (v, old) = (v as usize, x[v as usize]);
                     x[v] += dv;
-                    let exempt = self.model.inv_mass[v] == 0.0 && std::env::var("KINFREE").is_ok();
                     if let Some(sc) = &self.layers
-                        && !exempt
                         && sc.clamp(v, &mut x[v])
                     {
                         clamped += 1;
