@@ -1,7 +1,8 @@
 //! Criterion benchmarks of P2's kimono on one thread (issue 23's target: the fit, eq. (1), plus the
 //! print correction, at most 50 ms for the whole kimono): `kimono_fit` (the blend weights per
 //! sub-mesh and the sub-meshes meeting), `kimono_print` (the print correction), `kimono_both`, for
-//! a wearer who is not among the family's targets.
+//! a wearer who is not among the family's targets; on the flat targets, and `both_worn` on the worn
+//! ones (data/kimono, built into tryon-pipeline).
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use kimono::family::flat_family;
@@ -41,6 +42,20 @@ fn kimono(c: &mut Criterion) {
                 fit(base, &base.positions, &fam.targets, &d, &p).unwrap_or_else(|e| panic!("{e}"));
             std::hint::black_box(
                 correct_print(base, &base.positions, &f.positions, &PrintParams::default())
+                    .expect("shapes of the mesh"),
+            )
+        })
+    });
+    let worn =
+        tryon_pipeline::kimono::Targets::Worn(&tryon_pipeline::kimono_wear::embedded::shape_text)
+            .family()
+            .unwrap_or_else(|e| panic!("{e}"));
+    let wb = &worn.base;
+    group.bench_function("both_worn", |b| {
+        b.iter(|| {
+            let f = fit(wb, &wb.positions, &worn.targets, &d, &p).unwrap_or_else(|e| panic!("{e}"));
+            std::hint::black_box(
+                correct_print(wb, &wb.positions, &f.positions, &PrintParams::default())
                     .expect("shapes of the mesh"),
             )
         })

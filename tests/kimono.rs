@@ -4,7 +4,13 @@
 //! and fit.json with Table 1.
 
 use crate::end_to_end::{khronos_errors, scratch_dir};
-use tryon_pipeline::kimono::{KimonoError, Wearer, fit_kimono, write_kimono};
+use tryon_pipeline::kimono::{KimonoError, Targets, Wearer, fit_kimono, write_kimono};
+use tryon_pipeline::kimono_wear::store::dir_shapes;
+
+/// The worn target shapes in the repository's data/kimono.
+fn worn_dir() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/kimono")
+}
 
 /// Wearers the family was not built from (its targets are in `kimono::family::TARGETS`).
 const UNSEEN: [[f64; 4]; 5] = [
@@ -19,7 +25,7 @@ const UNSEEN: [[f64; 4]; 5] = [
 fn unseen_wearers_fit_within_the_issues_bounds_and_the_print_is_corrected() {
     for m in UNSEEN {
         let w = Wearer::new(m[0], m[1], m[2], m[3]);
-        let k = fit_kimono(&w).unwrap_or_else(|e| panic!("{m:?}: {e}"));
+        let k = fit_kimono(&w, Targets::Flat).unwrap_or_else(|e| panic!("{m:?}: {e}"));
         let r = &k.report;
         assert_eq!(r.dimensions.len(), 17);
         assert!(r.mean_rel_error <= 0.01, "{m:?}: mean {}", r.mean_rel_error);
@@ -38,10 +44,35 @@ fn unseen_wearers_fit_within_the_issues_bounds_and_the_print_is_corrected() {
     }
 }
 
+/// On the worn targets (data/kimono, made by the cloth solver) the fit misses the issue's bounds
+/// (measured over UNSEEN: mean 0.42-1.43%, max 2.7-13.1%, the back collar's width, which the worn
+/// shapes crumple) but stays within P2's own mean (3.50%); the print is squarer after the
+/// correction than before.
+#[test]
+fn unseen_wearers_fit_on_the_worn_targets_within_p2s_mean_error() {
+    let dir = worn_dir();
+    let text = dir_shapes(&dir);
+    for m in UNSEEN {
+        let w = Wearer::new(m[0], m[1], m[2], m[3]);
+        let k = fit_kimono(&w, Targets::Worn(&text)).unwrap_or_else(|e| panic!("{m:?}: {e}"));
+        let r = &k.report;
+        assert_eq!(r.targets, "worn");
+        assert!(
+            r.mean_rel_error <= 0.035,
+            "{m:?}: mean {}",
+            r.mean_rel_error
+        );
+        assert!(r.max_rel_error <= 0.15, "{m:?}: max {}", r.max_rel_error);
+        assert!(r.mean_rel_error < r.initial_mean_rel_error, "{m:?}");
+        assert!(r.print.after[0] < r.print.before[0], "{m:?}: {:?}", r.print);
+        assert!(k.positions.iter().all(|p| p.iter().all(|c| c.is_finite())));
+    }
+}
+
 #[test]
 fn the_outputs_read_back_and_the_glb_passes_the_validator() {
     let dir = scratch_dir("kimono");
-    let k = fit_kimono(&Wearer::new(1.62, 0.84, 0.64, 0.90)).unwrap();
+    let k = fit_kimono(&Wearer::new(1.62, 0.84, 0.64, 0.90), Targets::Flat).unwrap();
     write_kimono(&dir, &k, (120, 140)).unwrap();
     for f in ["before.png", "after.png"] {
         let d = png::Decoder::new(std::io::BufReader::new(
@@ -67,7 +98,7 @@ fn the_outputs_read_back_and_the_glb_passes_the_validator() {
 
 #[test]
 fn a_measurement_out_of_range_is_named() {
-    let e = fit_kimono(&Wearer::new(1.62, 0.84, 0.64, 1.5)).unwrap_err();
+    let e = fit_kimono(&Wearer::new(1.62, 0.84, 0.64, 1.5), Targets::Flat).unwrap_err();
     assert!(matches!(e, KimonoError::Measurements(_)));
     assert!(e.to_string().contains("`hip` = 1.5"), "{e}");
 }

@@ -1,5 +1,5 @@
 //! cargo xtask: project automation. `ci` (fmt, clippy, tests, tidy), `bench`, `drape`, `tidy`,
-//! `tradeoff`, `outputs`.
+//! `tradeoff`, `outputs`, `kimono-targets`.
 
 mod drape;
 mod outputs;
@@ -20,6 +20,10 @@ commands:
   outputs save DIR | outputs compare OLD NEW
                      run every scene (and variants) into DIR; compare two such runs (GLB and
                      PNG bytes, stats.json but timings)
+  kimono-targets [INDEX..]
+                     put the kimono family on the mannequins of their sizes (release, about 70 s
+                     each); writes data/kimono/*.obj and targets.json, pictures under
+                     target/kimono-targets/
   docs               regenerate docs/scenes.md (every scene key) from the schema
   tidy               check the architecture invariants and that docs/scenes.md is current";
 
@@ -33,6 +37,7 @@ fn main() -> ExitCode {
         Some("outputs") => outputs::run(&args[1..]),
         Some("docs") => tidy::write_scene_docs(),
         Some("tradeoff") => tradeoff(&args[1..]),
+        Some("kimono-targets") => kimono_targets(&args[1..]),
         Some("-h" | "--help" | "help") => {
             println!("{USAGE}");
             Ok(())
@@ -161,6 +166,25 @@ fn bench(args: &[String]) -> Result<(), String> {
 }
 
 /// `cargo xtask tradeoff`: the sweeps, in a release build, from the workspace root.
+/// P2's worn target shapes, made by the cloth solver (issue 23 item 3).
+fn kimono_targets(args: &[String]) -> Result<(), String> {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    std::env::set_current_dir(&root).map_err(|e| format!("{}: {e}", root.display()))?;
+    let mut a = vec![
+        "run",
+        "--release",
+        "-q",
+        "-p",
+        "tryon-pipeline",
+        "--example",
+        "kimono_targets",
+        "--",
+    ];
+    a.extend(["data/kimono", "target/kimono-targets"]);
+    a.extend(args.iter().map(String::as_str));
+    cargo(&a)
+}
+
 fn tradeoff(args: &[String]) -> Result<(), String> {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     std::env::set_current_dir(&root).map_err(|e| format!("{}: {e}", root.display()))?;

@@ -100,6 +100,12 @@ enum Command {
         /// 袖丈: sleeve length, m (default: height x 0.3).
         #[arg(long)]
         sleeve_length: Option<f64>,
+        /// The target shapes blended: laid flat (the default: the bounds hold there), or
+        /// worn on mannequins of their sizes (made by `cargo xtask kimono-targets`, built in;
+        /// their crumpled back collar fits to 13% and their print is measured on a crumpled
+        /// surface).
+        #[arg(long, value_enum, default_value_t = TargetShapes::Flat)]
+        targets: TargetShapes,
         /// Output directory.
         #[arg(long, default_value = "out/kimono")]
         out: PathBuf,
@@ -331,6 +337,7 @@ fn main() -> ExitCode {
             hip,
             yuki,
             sleeve_length,
+            targets,
             out,
             quiet,
         } => kimono(
@@ -342,6 +349,7 @@ fn main() -> ExitCode {
                 yuki,
                 sleeve_length,
             },
+            targets,
             &out,
             quiet,
         ),
@@ -372,10 +380,28 @@ fn main() -> ExitCode {
     }
 }
 
+/// `tryon kimono --targets`.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+enum TargetShapes {
+    Worn,
+    Flat,
+}
+
 /// `tryon kimono`: fit, write, print Table 1.
-fn kimono(w: &tryon_pipeline::kimono::Wearer, out: &Path, quiet: bool) -> Result<(), Failure> {
-    use tryon_pipeline::kimono::KimonoError;
-    let k = tryon_pipeline::kimono::fit_kimono(w).map_err(|e| match e {
+fn kimono(
+    w: &tryon_pipeline::kimono::Wearer,
+    targets: TargetShapes,
+    out: &Path,
+    quiet: bool,
+) -> Result<(), Failure> {
+    use tryon_pipeline::kimono::{KimonoError, Targets};
+    let embedded =
+        |name: &str| tryon_pipeline::kimono_wear::embedded::shape(name).map(str::to_string);
+    let targets = match targets {
+        TargetShapes::Worn => Targets::Worn(&embedded),
+        TargetShapes::Flat => Targets::Flat,
+    };
+    let k = tryon_pipeline::kimono::fit_kimono(w, targets).map_err(|e| match e {
         KimonoError::Measurements(_) => Failure::BadInput(e.to_string()),
         e => Failure::Internal(e.to_string()),
     })?;

@@ -289,6 +289,12 @@ pub trait ClothSolver: Send {
     /// built with) at `targets` from now on, as elastic bands bound to the moving body are.
     /// Handles it does not have and non-finite targets are ignored.
     fn hold_handles(&mut self, first: usize, targets: &[Vec3]);
+    /// Draws each of `particles` toward its point of `targets` by a spring of `stiffness` (N/m)
+    /// from now on (0 lets it go): a soft hold, which yields where contact disagrees. Solvers
+    /// without soft holds ignore it.
+    fn anchor(&mut self, particles: &[u32], targets: &[Vec3], stiffness: Real) {
+        let _ = (particles, targets, stiffness);
+    }
     /// Hands `handle.particle` to a scripted path from now on (a user grabbing the cloth). A
     /// particle it does not have, or an empty path, is ignored.
     fn grab(&mut self, handle: Handle);

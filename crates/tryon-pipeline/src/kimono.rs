@@ -3,6 +3,7 @@
 //! fitted kimono as GLB with the bolt's print, pictures before and after the print correction,
 //! and fit.json with P2's Table 1 (target, initial, fitted, relative error per dimension).
 
+use crate::kimono_wear::store::{ShapeError, worn_family};
 pub use kimono::Wearer;
 use kimono::family::{Family, flat_family};
 use kimono::{Dimensions, FitParams, PrintAspect, PrintParams};
@@ -26,6 +27,8 @@ pub enum KimonoError {
     Fit(#[from] kimono::FitError),
     #[error("the print correction: {0}")]
     Print(#[from] kimono::PrintError),
+    #[error("the worn target shapes: {0}")]
+    Shapes(#[from] ShapeError),
     #[error("{0}")]
     Output(String),
 }
@@ -67,7 +70,8 @@ pub struct FitReport {
     pub print_ms: Real,
     pub vertices: usize,
     pub triangles: usize,
-    /// What the targets are: "flat" (the tailored kimonos laid flat).
+    /// What the targets are: "worn" (the tailored kimonos put on the mannequins of their sizes,
+    /// data/kimono) or "flat" (laid flat).
     pub targets: &'static str,
 }
 
@@ -85,10 +89,44 @@ fn aspect(a: PrintAspect) -> [Real; 2] {
     [a.mean, a.scale]
 }
 
-/// Tailors, fits and corrects the print for `w`.
-pub fn fit_kimono(w: &Wearer) -> Result<KimonoFit, KimonoError> {
+/// The target shapes the fit blends.
+#[derive(Clone, Copy)]
+pub enum Targets<'a> {
+    /// The kimonos worn (data/kimono): `text(file name)` gives a shape's OBJ text (the CLI
+    /// builds them in; [`crate::kimono_wear::store::dir_shapes`] reads a folder).
+    Worn(&'a dyn Fn(&str) -> Option<String>),
+    /// The kimonos laid flat.
+    Flat,
+}
+
+impl std::fmt::Debug for Targets<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl Targets<'_> {
+    pub fn name(self) -> &'static str {
+        match self {
+            Targets::Worn(_) => "worn",
+            Targets::Flat => "flat",
+        }
+    }
+
+    /// The family: the initial shape and the ten targets.
+    pub fn family(self) -> Result<Family, KimonoError> {
+        let flat = flat_family()?;
+        Ok(match self {
+            Targets::Flat => flat,
+            Targets::Worn(text) => worn_family(flat, text)?,
+        })
+    }
+}
+
+/// Tailors, fits and corrects the print for `w`, blending `targets`.
+pub fn fit_kimono(w: &Wearer, targets: Targets) -> Result<KimonoFit, KimonoError> {
     let dims = kimono::tailor(w)?;
-    let family = flat_family()?;
+    let family = targets.family()?;
     let base = &family.base;
     let t0 = Instant::now();
     let fit = kimono::fit(
@@ -151,7 +189,7 @@ pub fn fit_kimono(w: &Wearer) -> Result<KimonoFit, KimonoError> {
         print_ms,
         vertices: base.positions.len(),
         triangles: base.triangles.len(),
-        targets: "flat",
+        targets: targets.name(),
     };
     Ok(KimonoFit {
         dims,

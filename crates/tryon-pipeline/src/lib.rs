@@ -16,6 +16,7 @@ pub mod export;
 pub mod folding;
 pub mod hold;
 pub mod kimono;
+pub mod kimono_wear;
 pub mod metrics;
 pub mod pipeline;
 pub mod real;

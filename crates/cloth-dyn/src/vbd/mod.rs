@@ -14,6 +14,7 @@
 mod bending;
 pub mod colour;
 mod contact;
+mod forces;
 mod layers;
 mod linalg;
 mod pairs;
@@ -134,6 +135,8 @@ pub struct VbdSim {
     blocks: Vec<[u32; 2]>,
     /// Per block, a pair's ring (empty for a vertex alone) and its target offset for this step.
     rings: Vec<pairs::Ring>,
+    /// Soft holds: per particle, a point it is drawn to and the spring's stiffness (N/m).
+    anchors: Vec<Option<(Vec3, Real)>>,
     targets: Vec<Vec3>,
     /// Blocks in colour order and each colour's range.
     order: Vec<u32>,
@@ -247,6 +250,7 @@ impl VbdSim {
             targets: vec![Vec3::zeros(); blocks.len()],
             blocks,
             rings,
+            anchors: Vec::new(),
             order,
             colours,
             thickness,
@@ -337,24 +341,6 @@ impl VbdSim {
         self.prev = prev;
     }
 
-    /// The net force of the springs on every particle at `x` (N), as the wrinkle stage reads it
-    /// from the frame (P1 4.3.2's elastic forces): the same springs the sweeps minimise over.
-    fn elastic_forces(&self, x: &[Vec3], out: &mut Vec<Vec3>) {
-        out.clear();
-        let n = x.len().min(self.offsets.len().saturating_sub(1));
-        out.extend((0..n).map(|i| {
-            let mut f = Vec3::zeros();
-            for a in pairs::arms_of(&self.offsets, &self.arms, i) {
-                let d = x[i] - x[a.other as usize];
-                let l = d.norm();
-                if l > 1e-12 {
-                    f -= d * (a.k * (l - a.rest) / l);
-                }
-            }
-            f
-        }));
-    }
-
     /// Vertex `i`'s force and Hessian at `x`: inertia, its springs except those to `partner`,
     /// and its contact planes.
     fn gather(&self, x: &[Vec3], i: usize, partner: u32, h: Real) -> (Vec3, Mat3) {
@@ -383,6 +369,7 @@ impl VbdSim {
             add_outer(&mut o, s, &d);
         }
         self.hinges.add(i, &mut f, &mut o);
+        self.add_anchor(i, xi, &mut f, &mut iso);
         let kp = pokes::POKE_OVER_CONTACT * self.penalty(i);
         let tris = &self.model.triangles;
         self.pokes
@@ -581,6 +568,10 @@ impl ClothSolver for VbdSim {
 
     fn hold_handles(&mut self, first: usize, targets: &[Vec3]) {
         self.model.hold_handles(first, targets)
+    }
+
+    fn anchor(&mut self, particles: &[u32], targets: &[Vec3], stiffness: Real) {
+        self.set_anchors(particles, targets, stiffness)
     }
 
     fn grab(&mut self, handle: Handle) {
