@@ -80,7 +80,7 @@ fn run() -> Result<(), String> {
         let clock = Instant::now();
         let mut last = String::new();
         let mut progress = |act: &str, f: usize, n: usize| {
-            if f == n || f % 30 == 0 {
+            if f == n || f.is_multiple_of(30) {
                 last = format!("{name}: {act} {f}/{n}");
                 eprintln!("{last}");
             }

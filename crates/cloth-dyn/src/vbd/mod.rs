@@ -14,6 +14,7 @@
 mod bending;
 pub mod colour;
 mod contact;
+mod forces;
 mod layers;
 mod linalg;
 mod pairs;
@@ -340,24 +341,6 @@ impl VbdSim {
         self.prev = prev;
     }
 
-    /// The net force of the springs on every particle at `x` (N), as the wrinkle stage reads it
-    /// from the frame (P1 4.3.2's elastic forces): the same springs the sweeps minimise over.
-    fn elastic_forces(&self, x: &[Vec3], out: &mut Vec<Vec3>) {
-        out.clear();
-        let n = x.len().min(self.offsets.len().saturating_sub(1));
-        out.extend((0..n).map(|i| {
-            let mut f = Vec3::zeros();
-            for a in pairs::arms_of(&self.offsets, &self.arms, i) {
-                let d = x[i] - x[a.other as usize];
-                let l = d.norm();
-                if l > 1e-12 {
-                    f -= d * (a.k * (l - a.rest) / l);
-                }
-            }
-            f
-        }));
-    }
-
     /// Vertex `i`'s force and Hessian at `x`: inertia, its springs except those to `partner`,
     /// and its contact planes.
     fn gather(&self, x: &[Vec3], i: usize, partner: u32, h: Real) -> (Vec3, Mat3) {
@@ -386,10 +369,7 @@ impl VbdSim {
             add_outer(&mut o, s, &d);
         }
         self.hinges.add(i, &mut f, &mut o);
-        if let Some(Some((p, k))) = self.anchors.get(i) {
-            f += (p - xi) * *k;
-            iso += k;
-        }
+        self.add_anchor(i, xi, &mut f, &mut iso);
         let kp = pokes::POKE_OVER_CONTACT * self.penalty(i);
         let tris = &self.model.triangles;
         self.pokes
@@ -591,12 +571,7 @@ impl ClothSolver for VbdSim {
     }
 
     fn anchor(&mut self, particles: &[u32], targets: &[Vec3], stiffness: Real) {
-        self.anchors.resize(self.model.particle_count(), None);
-        for (&i, p) in particles.iter().zip(targets) {
-            if let Some(a) = self.anchors.get_mut(i as usize) {
-                *a = (stiffness > 0.0 && tryon_core::math::is_finite(p)).then_some((*p, stiffness));
-            }
-        }
+        self.set_anchors(particles, targets, stiffness)
     }
 
     fn grab(&mut self, handle: Handle) {

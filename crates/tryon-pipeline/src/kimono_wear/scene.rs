@@ -7,6 +7,7 @@ use crate::kimono::{Targets, fit_kimono};
 use crate::scene::KimonoSpec;
 use crate::scene::{GarmentSection, Scene};
 use mocap_retarget::LeadIn;
+use tryon_core::math::Real;
 use tryon_core::measure::Measurements;
 use tryon_core::mesh::PolyMesh;
 use tryon_core::pose::Skeleton;
@@ -31,7 +32,27 @@ pub(crate) fn garment(m: &Measurements, k: &KimonoSpec) -> Result<PolyMesh, Asse
         sleeve_length: k.sleeve_length,
     };
     let fit = fit_kimono(&w, Targets::Worn(&super::embedded::shape_text))?;
-    let mesh = PolyMesh::from_triangles(fit.positions, &fit.family.base.triangles);
+    // The blend follows the dimensions, not the wearer's height: its shoulders land where the
+    // blended targets' are (8 cm low on a 1.62 m wearer). Set them on this wearer's shoulders, as
+    // the dressing laid every target (its fold line just over them).
+    let st =
+        super::stand::stand(&w).map_err(|e| crate::kimono::KimonoError::Output(e.to_string()))?;
+    let shoulders = |p: &[tryon_core::math::Vec3]| {
+        p.iter()
+            .filter(|v| (0.1..0.3).contains(&v.x.abs()))
+            .map(|v| v.y)
+            .fold(Real::NEG_INFINITY, Real::max)
+    };
+    let base_top = shoulders(&fit.family.base.positions);
+    let base_stand = super::stand::stand(&kimono::family::BASE)
+        .map_err(|e| crate::kimono::KimonoError::Output(e.to_string()))?;
+    let lift = (st.top + base_top - base_stand.top) - shoulders(&fit.positions);
+    let positions = fit
+        .positions
+        .iter()
+        .map(|p| p + tryon_core::math::Vec3::new(0.0, lift, 0.0))
+        .collect();
+    let mesh = PolyMesh::from_triangles(positions, &fit.family.base.triangles);
     Ok(mesh.map_err(|e| AssembleError::Kimono(crate::kimono::KimonoError::Output(e.to_string())))?)
 }
 
