@@ -234,3 +234,36 @@ pub fn wear(
         ms_per_frame: clock.elapsed().as_secs_f64() * 1e3 / steps.max(1) as Real,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_dressing_of_no_frames_returns_the_folded_start_and_a_wrong_shape_is_an_error() {
+        let fam = kimono::family::flat_family().unwrap();
+        let none = WearSettings {
+            inflate_frames: 0,
+            settle_frames: 0,
+            tie_frames: 0,
+            hold_frames: 0,
+            ..WearSettings::default()
+        };
+        let w = kimono::family::BASE;
+        let worn = wear(&w, &fam.base.positions, &fam.base, &none, &mut |_, _, _| {}).unwrap();
+        assert_eq!(worn.positions.len(), fam.base.positions.len());
+        assert_eq!(worn.frames, 0);
+        // Nothing stepped: the start's crossings are the end's.
+        assert_eq!(worn.crossings[0], worn.crossings[2]);
+        assert!(worn.row_lag_m.iter().all(|l| l.is_finite()));
+        let e = wear(
+            &w,
+            &fam.base.positions[..5],
+            &fam.base,
+            &none,
+            &mut |_, _, _| {},
+        )
+        .unwrap_err();
+        assert!(matches!(e, WearError::Shape { found: 5, .. }), "{e}");
+    }
+}

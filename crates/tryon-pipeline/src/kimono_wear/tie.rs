@@ -213,7 +213,8 @@ pub(super) fn tie(
 ) -> (usize, [Real; 3]) {
     let (held, plans, sizes) = plan(job, frame);
     let total = job.frames + job.hold_frames;
-    let mut targets = Vec::new();
+    // Where the rows start (what no frames of tying leaves them measured against).
+    let mut targets: Vec<Vec3> = plans.iter().map(|p| p.at(job.m, 0.0)).collect();
     for f in 1..=total {
         let tau = smoothstep((f as Real / job.frames.max(1) as Real).min(1.0));
         targets = plans.iter().map(|p| p.at(job.m, tau)).collect();
