@@ -142,7 +142,7 @@ fn bands(
     let loops = garment_fit::boundary_loops(garment)?;
     let mut attached: Vec<u32> = dressed.attachments.iter().map(|a| a.vertex).collect();
     attached.sort_unstable();
-    let mut vertices = Vec::new();
+    let mut vertices = dressed.tied.clone();
     for worn in scene.garments() {
         let (band_gap, waist_gap) = match worn.garment {
             GarmentSection::Dress(g) => (g.band_gap, 0.0),

@@ -1,13 +1,14 @@
 //! A kimono in a scene (`[garment] kind = "kimono"`, issue 23 item 5): the kimono fitted to the
-//! mannequin's measurements on the built-in worn targets, in the pose it was put on in (arms
-//! raised), and the motion led in from that pose.
+//! mannequin's measurements (P2's fit on the flat targets), put on that mannequin as the worn
+//! targets were ([`super::wear_on`]: arms raised, inflated, tied), and the motion led in from the
+//! pose it was put on in. The cord's and band head's rows stay tied to the body.
 
 use crate::build::AssembleError;
-use crate::kimono::{Targets, fit_kimono};
+use crate::kimono::{KimonoError, Targets, fit_kimono};
 use crate::scene::KimonoSpec;
 use crate::scene::{GarmentSection, Scene};
 use mocap_retarget::LeadIn;
-use tryon_core::math::Real;
+use std::sync::Mutex;
 use tryon_core::measure::Measurements;
 use tryon_core::mesh::PolyMesh;
 use tryon_core::pose::Skeleton;
@@ -21,8 +22,40 @@ pub(crate) fn spec(scene: &Scene) -> Option<&KimonoSpec> {
     })
 }
 
-/// The kimono fitted to the mannequin of `m`, as worn (arms raised).
-pub(crate) fn garment(m: &Measurements, k: &KimonoSpec) -> Result<PolyMesh, AssembleError> {
+/// A kimono put on the mannequin.
+#[derive(Clone)]
+pub(crate) struct WornKimono {
+    /// As worn, on the body in the pose it was put on in (arms raised).
+    pub mesh: PolyMesh,
+    /// The vertices the cord holds to the body.
+    pub tied: Vec<u32>,
+}
+
+/// The kimonos put on in this process, by wearer and settings: putting one on takes about 40 s,
+/// and a process may build the same scene more than once (a check, then a run; tests).
+type Memo = Vec<(String, WornKimono)>;
+static WORN: Mutex<Memo> = Mutex::new(Vec::new());
+/// How many are kept (about 0.1 MB each).
+const MEMO_LEN: usize = 8;
+
+/// The kimono fitted to the mannequin of `m` and put on it (once per process for each wearer and
+/// setting).
+pub(crate) fn garment(m: &Measurements, k: &KimonoSpec) -> Result<WornKimono, AssembleError> {
+    let key = format!("{m:?} {k:?}");
+    // One at a time: a second scene of the same wearer waits for the first instead of repeating it.
+    let mut memo = WORN.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some((_, w)) = memo.iter().find(|(name, _)| *name == key) {
+        return Ok(w.clone());
+    }
+    let worn = put_on(m, k)?;
+    if memo.len() >= MEMO_LEN {
+        memo.remove(0);
+    }
+    memo.push((key, worn.clone()));
+    Ok(worn)
+}
+
+fn put_on(m: &Measurements, k: &KimonoSpec) -> Result<WornKimono, AssembleError> {
     let w = kimono::Wearer {
         height: m.height,
         bust: m.bust,
@@ -31,29 +64,25 @@ pub(crate) fn garment(m: &Measurements, k: &KimonoSpec) -> Result<PolyMesh, Asse
         yuki: k.yuki,
         sleeve_length: k.sleeve_length,
     };
-    let fit = fit_kimono(&w, Targets::Worn(&super::embedded::shape_text))?;
-    // The blend follows the dimensions, not the wearer's height: its shoulders land where the
-    // blended targets' are (8 cm low on a 1.62 m wearer). Set them on this wearer's shoulders, as
-    // the dressing laid every target (its fold line just over them).
-    let st =
-        super::stand::stand(&w).map_err(|e| crate::kimono::KimonoError::Output(e.to_string()))?;
-    let shoulders = |p: &[tryon_core::math::Vec3]| {
-        p.iter()
-            .filter(|v| (0.1..0.3).contains(&v.x.abs()))
-            .map(|v| v.y)
-            .fold(Real::NEG_INFINITY, Real::max)
+    let fit = fit_kimono(&w, Targets::Flat)?;
+    let settings = super::WearSettings {
+        hold_frames: k.hold_frames,
+        ..super::WearSettings::default()
     };
-    let base_top = shoulders(&fit.family.base.positions);
-    let base_stand = super::stand::stand(&kimono::family::BASE)
-        .map_err(|e| crate::kimono::KimonoError::Output(e.to_string()))?;
-    let lift = (st.top + base_top - base_stand.top) - shoulders(&fit.positions);
-    let positions = fit
-        .positions
-        .iter()
-        .map(|p| p + tryon_core::math::Vec3::new(0.0, lift, 0.0))
-        .collect();
-    let mesh = PolyMesh::from_triangles(positions, &fit.family.base.triangles);
-    Ok(mesh.map_err(|e| AssembleError::Kimono(crate::kimono::KimonoError::Output(e.to_string())))?)
+    let worn = super::wear_on(
+        m,
+        &w,
+        &fit.positions,
+        &fit.family.base,
+        &settings,
+        &mut |_, _, _| {},
+    )?;
+    let mesh = PolyMesh::from_triangles(worn.positions, &fit.family.base.triangles)
+        .map_err(|e| KimonoError::Output(e.to_string()))?;
+    Ok(WornKimono {
+        mesh,
+        tied: worn.tied,
+    })
 }
 
 /// `motion` led in from the kimono's pose over `k.lead` seconds.

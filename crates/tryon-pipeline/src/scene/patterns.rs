@@ -122,9 +122,9 @@ impl Default for ShirtSpec {
     }
 }
 
-/// A kimono (P2) fitted to the mannequin's height, bust, waist and hip: the blend of the worn
-/// target shapes (data/kimono) with its print corrected, put on with the arms raised; the body
-/// lowers them over `lead` seconds before the motion starts.
+/// A kimono (P2) fitted to the mannequin's height, bust, waist and hip (the blend of the flat
+/// target shapes), put on the mannequin with its arms raised as the worn targets were, and tied;
+/// the body lowers its arms over `lead` seconds before the motion starts.
 #[derive(Clone, Debug, Deserialize, Serialize, JsonSchema, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct KimonoSpec {
@@ -137,6 +137,9 @@ pub struct KimonoSpec {
     /// Time the body takes to lower its arms from the pose the kimono was put on in (s).
     #[schemars(range(min = 0.1, max = 10.0))]
     pub lead: Real,
+    /// Frames the cord holds the kimono on the mannequin after tying it, before the scene starts.
+    #[schemars(range(max = 600))]
+    pub hold_frames: usize,
 }
 
 impl Default for KimonoSpec {
@@ -145,6 +148,7 @@ impl Default for KimonoSpec {
             yuki: None,
             sleeve_length: None,
             lead: 1.0,
+            hold_frames: 60,
         }
     }
 }
