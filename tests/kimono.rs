@@ -102,3 +102,33 @@ fn a_measurement_out_of_range_is_named() {
     assert!(matches!(e, KimonoError::Measurements(_)));
     assert!(e.to_string().contains("`hip` = 1.5"), "{e}");
 }
+
+/// The extent in x of `points` to each side: (the most negative x, the most positive).
+fn reach_x(points: &[tryon_core::math::Vec3]) -> (f64, f64) {
+    points.iter().fold((0.0, 0.0), |(lo, hi), p| {
+        (f64::min(lo, p.x), f64::max(hi, p.x))
+    })
+}
+
+#[test]
+fn the_kimono_scene_starts_worn_tied_and_with_the_arms_in_the_sleeves() {
+    let path = crate::end_to_end::repo().join("data/scenes/kimono-walk.toml");
+    let scene = tryon_pipeline::Scene::load(&path).unwrap();
+    let mut p = tryon_pipeline::Pipeline::new(scene).unwrap_or_else(|e| panic!("{e}"));
+    let tied = p.bands.as_ref().map_or(0, |b| b.vertices.len());
+    assert!(tied >= 20, "{tied} vertices tied to the body");
+    let out = p.run(Some(3), |_, _| {});
+    let m = &out.stats.metrics;
+    assert!(m.max_penetration_m < 0.003, "{} m", m.max_penetration_m);
+    assert_eq!(m.detached_share, 0.0);
+    assert_eq!((m.rollbacks, m.non_finite_events), (0, 0));
+    // Put on with the arms raised: each sleeve reaches along its arm (a sleeve that slid off
+    // the arm hangs from the shoulder, half as far out).
+    let last = out.frames.last().unwrap();
+    let body = p.body_at(last.pose.as_ref());
+    let (b, g) = (reach_x(&body), reach_x(&last.garment));
+    assert!(
+        g.0 < 0.75 * b.0 && g.1 > 0.75 * b.1,
+        "body {b:?}, kimono {g:?}"
+    );
+}

@@ -6,11 +6,13 @@
 pub mod clearance;
 pub mod clips;
 pub mod ik;
+pub mod lead_in;
 pub mod names;
 pub mod retarget;
 pub mod turns;
 
 pub use clips::{ArmRaise, ClipError, Walk, WalkParams};
 pub use ik::{LegSolution, frame_rotation, solve_leg};
+pub use lead_in::{LeadIn, blend_poses};
 pub use names::{Role, RoleMap, Scheme};
 pub use retarget::{Placement, RetargetError, RetargetOptions, Retargeted, Rig, retarget};

@@ -56,7 +56,7 @@ impl Pipeline {
             &folds.bends,
         )?;
         let collider = collides
-            .then(|| build::collider(fx.body_collision, &body.mesh, thickness, &fx))
+            .then(|| build::collider(fx.body_collision, body.start_mesh(), thickness, &fx))
             .transpose()?;
         let follower: Option<Box<dyn Follower>> = if fx.follow_body && moving {
             let (root, root_rest) = body.model.rig().map_or((0, Vec3::zeros()), |r| r.root());
@@ -142,14 +142,14 @@ fn bands(
     let loops = garment_fit::boundary_loops(garment)?;
     let mut attached: Vec<u32> = dressed.attachments.iter().map(|a| a.vertex).collect();
     attached.sort_unstable();
-    let mut vertices = Vec::new();
+    let mut vertices = dressed.tied.clone();
     for worn in scene.garments() {
         let (band_gap, waist_gap) = match worn.garment {
             GarmentSection::Dress(g) => (g.band_gap, 0.0),
             GarmentSection::Skirt(g) => (g.band_gap, 0.0),
             GarmentSection::Shirt(g) => (g.band_gap, 0.0),
             GarmentSection::Mhclo(g) => (g.band_gap, g.waist_gap),
-            GarmentSection::Square(_) => (0.0, 0.0),
+            GarmentSection::Square(_) | GarmentSection::Kimono(_) => (0.0, 0.0),
         };
         if !(band_gap > 0.0 || waist_gap > 0.0) {
             continue;

@@ -1,11 +1,12 @@
 //! One builder per stage of a scene: the body and its motion, the garment placed on it, the cloth
 //! solver, the colliders, the bands and the surface stages. `assemble.rs` calls them in order.
 
+pub use crate::garments::garment_of;
 use crate::real;
 use crate::scene::BroadPhaseName;
 use crate::scene::{
     BodySection, CollisionMethod, EffectsSection, GarmentSection, IntegratorName, MannequinBody,
-    MaterialName, MotionSection, ObjectBody, Scene, ShirtSpec, SolverName, XpbdBendingName,
+    MaterialName, MotionSection, ObjectBody, Scene, SolverName, XpbdBendingName,
 };
 use body_collide::{
     BodyError, DepthMapCollider, ExactCollider, NearestVertexCollider, SdfCollider,
@@ -18,12 +19,12 @@ use cloth_dyn::{
     BuildClothError, ClothModel, ClothParams, ClothSim, Handle, IntegratorKind, VbdParams, VbdSim,
     XpbdBending, XpbdParams, XpbdSim, presets,
 };
-use garment_fit::{DressParams, PatternError, ShirtParams, SkirtParams};
+use garment_fit::PatternError;
 use mocap_retarget::{ArmRaise, ClipError, Walk, WalkParams};
 use thiserror::Error;
 use tryon_core::math::{Real, Vec3};
 use tryon_core::measure::MeasureError;
-use tryon_core::mesh::{Face, PolyMesh, grid_xz};
+use tryon_core::mesh::{Face, PolyMesh};
 use tryon_core::shapes::{icosphere, table_slab};
 use tryon_core::stages::{BodyModel, ClothSolver, Collider, MotionSource, NoCollider, StaticBody};
 
@@ -51,6 +52,12 @@ pub enum AssembleError {
     Refine(#[from] pnt_surface::RefineError),
     #[error("surface detail: {0}")]
     Detail(#[from] wrinkle::DetailError),
+    #[error("kimono: {0}")]
+    Kimono(#[from] crate::kimono::KimonoError),
+    #[error("a kimono is worn on the mannequin: set [body] kind = \"mannequin\"")]
+    KimonoBody,
+    #[error("kimono, putting it on: {0}")]
+    KimonoWear(#[from] crate::kimono_wear::WearError),
     #[error("garments: {0}")]
     Wear(#[from] cloth_dyn::wear::WearError),
     #[error("[[fold]] {0}")]
@@ -106,6 +113,16 @@ pub(crate) struct BuiltBody {
     pub clip_len: Real,
     /// What retargeting a captured clip changed (`None` for other motions).
     pub retarget: Option<crate::run::RetargetStats>,
+    /// The body in the motion's first pose where that is not the rest pose (a kimono's lead-in):
+    /// the garment is placed against it and the collider starts from it.
+    pub start: Option<PolyMesh>,
+}
+
+impl BuiltBody {
+    /// The body the garment starts on.
+    pub fn start_mesh(&self) -> &PolyMesh {
+        self.start.as_ref().unwrap_or(&self.mesh)
+    }
 }
 
 /// A body that holds still at `mesh`.
@@ -121,6 +138,7 @@ fn fixed(mesh: PolyMesh, clip_len: Real) -> BuiltBody {
         makehuman: None,
         clip_len,
         retarget: None,
+        start: None,
     }
 }
 
@@ -155,6 +173,7 @@ pub(crate) fn body(scene: &Scene) -> Result<BuiltBody, AssembleError> {
                     motion: Some(Box::new(r)),
                     mesh,
                     makehuman: None,
+                    start: None,
                 }
             } else {
                 fixed(mesh, still.unwrap_or(2.0))
@@ -170,10 +189,15 @@ fn mannequin(scene: &Scene, spec: &MannequinBody) -> Result<BuiltBody, AssembleE
     let m = spec.measurements();
     let man = Mannequin::new(&m)?;
     let mut retarget = None;
+    let kimono = crate::kimono_wear::scene::spec(scene);
     let motion: Box<dyn MotionSource> = match &scene.motion {
-        MotionSection::Still(s) => {
+        MotionSection::Still(s) if kimono.is_none() => {
             return Ok(fixed(man.mesh, s.duration.unwrap_or(2.0)));
         }
+        MotionSection::Still(s) => Box::new(tryon_core::stages::StillMotion {
+            joints: man.skeleton.names.len(),
+            duration: s.duration.unwrap_or(2.0),
+        }),
         MotionSection::Walk(w) => Box::new(Walk::new(
             &man.skeleton,
             WalkParams {
@@ -204,85 +228,41 @@ fn mannequin(scene: &Scene, spec: &MannequinBody) -> Result<BuiltBody, AssembleE
             Box::new(r)
         }
     };
+    let motion = match kimono {
+        Some(k) => crate::kimono_wear::scene::lead_in(&man.skeleton, k, motion),
+        None => motion,
+    };
     let (tris, _) = man.mesh.triangulate();
     let clip_len = motion.duration();
-    let model = SkinnedBody::new(
-        man.mesh.positions.clone(),
-        tris,
-        man.skeleton,
-        man.joint_rest,
-        man.skin,
+    let model = press(
+        SkinnedBody::new(
+            man.mesh.positions.clone(),
+            tris,
+            man.skeleton,
+            man.joint_rest,
+            man.skin,
+        ),
+        scene,
     );
+    let start = kimono.map(|_| {
+        let mut first = tryon_core::pose::Pose::default();
+        motion.sample(0.0, &mut first);
+        let mut positions = Vec::new();
+        model.shape_at(&first, &mut positions);
+        PolyMesh {
+            positions,
+            faces: man.mesh.faces.clone(),
+        }
+    });
     Ok(BuiltBody {
         mesh: man.mesh,
-        model: Box::new(press(model, scene)),
+        model: Box::new(model),
         motion: Some(motion),
         makehuman: None,
         clip_len,
         retarget,
+        start,
     })
-}
-
-/// The shirt of `g` cut from the mannequin of `m` (the scene's body: both are built from the same
-/// measurements). A vertex belongs to an arm when its strongest influence is that arm's upper arm,
-/// forearm or hand.
-fn shirt(m: &tryon_core::measure::Measurements, g: &ShirtSpec) -> Result<PolyMesh, AssembleError> {
-    use tryon_core::pose::mannequin_joints as j;
-    let man = Mannequin::new(m)?;
-    let joint = |name: &str| man.skeleton.names.iter().position(|n| n == name);
-    let chains = [
-        [j::UPPERARM_L, j::FOREARM_L, j::HAND_L],
-        [j::UPPERARM_R, j::FOREARM_R, j::HAND_R],
-    ]
-    .map(|c| c.map(joint));
-    let arm_of: Vec<Option<u8>> = (0..man.mesh.positions.len())
-        .map(|v| {
-            let (w, js) = (man.skin.weights[v], man.skin.joints[v]);
-            let k = (0..4).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap_or(0);
-            let strongest = Some(js[k] as usize);
-            (0..2u8).find(|&a| chains[a as usize].contains(&strongest))
-        })
-        .collect();
-    let arms = chains.map(|c| {
-        let (root, elbow) = match (c[0], c[1]) {
-            (Some(a), Some(b)) => (man.joint_rest[a], man.joint_rest[b]),
-            _ => (Vec3::zeros(), Vec3::x()),
-        };
-        garment_fit::Arm {
-            root,
-            dir: (elbow - root).try_normalize(1e-12).unwrap_or_else(Vec3::x),
-        }
-    });
-    let body = garment_fit::ShirtBody {
-        mesh: &man.mesh,
-        arm_of: &arm_of,
-        arms,
-    };
-    let p = ShirtParams {
-        ease: [g.ease[0], g.ease[1], g.ease[2]],
-        sleeve_ease: g.sleeve_ease,
-        sleeve_length: g.sleeve_length,
-        hem_below_hip: g.hem_below_hip,
-        subdivisions: g.subdivisions,
-    };
-    // The least clearance over the skin: the cloth's thickness at the default figure.
-    let mut collider = ExactCollider::new(&man.mesh, 0.004 * m.scale())?;
-    let mesh = garment_fit::shirt(m, &body, &mut collider, &p)?.mesh;
-    // A heavy figure's mannequin has its arms through its sides in the A-pose: a shirt cut from it
-    // crosses itself there and tears at the first frame.
-    let (tris, _) = mesh.triangulate();
-    let crossing = crate::crossings::crossings(&mesh.positions, &tris).len();
-    if crossing > 0 {
-        let (body_tris, _) = man.mesh.triangulate();
-        let body = crate::crossings::crossings(&man.mesh.positions, &body_tris).len();
-        return Err(PatternError::Cut(format!(
-            "the shirt crosses itself in {crossing} triangle pairs (the mannequin of these \
-             measurements crosses itself in {body}: its arms pass into its sides, so the \
-             sleeves would too)"
-        ))
-        .into());
-    }
-    Ok(mesh)
 }
 
 /// `body` pressed apart where its parts meet, if the scene asks for it: the gap holds two layers
@@ -292,76 +272,6 @@ fn press(body: SkinnedBody, scene: &Scene) -> SkinnedBody {
         true => real::pressed(body, 2.0 * scene.cloth.thickness),
         false => body,
     }
-}
-
-/// One of the scene's garments, `garment`, before it is placed on the body.
-pub fn garment_of(
-    scene: &Scene,
-    garment: &GarmentSection,
-    makehuman: Option<&body_model::MakeHumanBody>,
-) -> Result<PolyMesh, AssembleError> {
-    let m = match &scene.body {
-        BodySection::Mannequin(b) => b.measurements(),
-        _ => tryon_core::measure::Measurements::default(),
-    };
-    Ok(match garment {
-        GarmentSection::Dress(g) => {
-            let p = DressParams {
-                ease: [g.ease[0], g.ease[1], g.ease[2]],
-                flare: g.flare,
-                hem_above_knee: g.hem_above_knee,
-                columns: g.columns,
-                row_spacing: g.row_spacing,
-            };
-            garment_fit::dress(&m, &p)?.mesh
-        }
-        GarmentSection::Shirt(g) => shirt(&m, g)?,
-        GarmentSection::Skirt(g) => {
-            let p = SkirtParams {
-                ease: [g.ease[0], g.ease[1]],
-                flare: g.flare,
-                hem_above_knee: g.hem_above_knee,
-                columns: g.columns,
-                row_spacing: g.row_spacing,
-            };
-            garment_fit::skirt(&m, &p)?.mesh
-        }
-        GarmentSection::Square(g) => {
-            let n = g.particles.max(2) - 1;
-            grid_xz(n, n, g.size, g.size, g.drop_height)
-        }
-        GarmentSection::Mhclo(g) => {
-            let (binding, obj) = real::mhclo(scene, &g.file)?;
-            let rest = makehuman.map(|b| b.rest.as_slice()).unwrap_or(&[]);
-            let fitted = garment_fit::fit_garment(&binding, &obj, rest)
-                .map_err(|e| AssembleError::Asset(e.into()))?;
-            // Collapse sliver edges (doubled hems): below 15% of the median edge.
-            let min_len = 0.15 * garment_fit::median_edge(&fitted);
-            let mesh_error = |source| {
-                let name = binding.name.clone();
-                AssembleError::Asset(garment_fit::FitError::Mesh { name, source }.into())
-            };
-            let welded = garment_fit::weld_short_edges(&fitted, min_len).map_err(mesh_error)?;
-            // Close what the modeller left touching (a buttoned front).
-            if g.closures > 0.0 {
-                let gap = g.closures * garment_fit::median_edge(&welded.mesh);
-                let closed =
-                    garment_fit::close_openings(&welded.mesh, gap).map_err(|e| match e {
-                        garment_fit::CloseError::Mesh(m) => mesh_error(m),
-                        garment_fit::CloseError::Topology(t) => AssembleError::Asset(
-                            garment_fit::FitError::Topology {
-                                name: binding.name.clone(),
-                                source: t,
-                            }
-                            .into(),
-                        ),
-                    })?;
-                closed.0.mesh
-            } else {
-                welded.mesh
-            }
-        }
-    })
 }
 
 /// The cloth's material: the preset for the garment's resolution, then the scene's values.

@@ -14,6 +14,7 @@ pub mod crossings;
 pub mod drape;
 pub mod export;
 pub mod folding;
+mod garments;
 pub mod hold;
 pub mod kimono;
 pub mod kimono_wear;

@@ -371,6 +371,7 @@ impl Pipeline {
                 G::Skirt(_) => "skirt".into(),
                 G::Shirt(_) => "shirt".into(),
                 G::Square(_) => "sheet".into(),
+                G::Kimono(_) => "kimono".into(),
             })
             .collect();
         let of_coarse = |v: u32| {

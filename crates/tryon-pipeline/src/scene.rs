@@ -16,9 +16,9 @@ mod sections;
 
 pub use folds::{FoldShape, FoldSpec, FoldingSection, SmoothName};
 pub use schema::{
-    ArmRaiseSpec, BodySection, BvhSpec, DressSpec, GarmentSection, IntegratorName, MakeHumanSpec,
-    MannequinBody, MaterialName, MhcloSpec, MotionSection, ObjectBody, RigName, SceneSection,
-    ShirtSpec, SkirtSpec, SphereBody, SquareSpec, StillSpec, WalkSpec, WearSpec,
+    ArmRaiseSpec, BodySection, BvhSpec, DressSpec, GarmentSection, IntegratorName, KimonoSpec,
+    MakeHumanSpec, MannequinBody, MaterialName, MhcloSpec, MotionSection, ObjectBody, RigName,
+    SceneSection, ShirtSpec, SkirtSpec, SphereBody, SquareSpec, StillSpec, WalkSpec, WearSpec,
 };
 pub use sections::{
     BroadPhaseName, ClothSection, CollisionMethod, EffectsSection, OutputSection, SolverName,

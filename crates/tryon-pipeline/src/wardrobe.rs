@@ -3,7 +3,7 @@
 //! ranges say which garment is which. Contact between them is then the cloth's contact with
 //! itself, inside the one solve.
 
-use crate::build::{self, AssembleError, BuiltBody};
+use crate::build::{AssembleError, BuiltBody};
 use crate::scene::{GarmentSection, Scene};
 use body_collide::ExactCollider;
 use cloth_dyn::wear::GarmentWear;
@@ -42,6 +42,8 @@ pub struct Dressed {
     /// Small separate pieces of the real garments riding on the piece beneath them (in `mesh`'s
     /// numbering).
     pub attachments: Vec<Attachment>,
+    /// Vertices tied to the body (a kimono's cord), held to it as bands are.
+    pub tied: Vec<u32>,
 }
 
 impl Dressed {
@@ -101,16 +103,22 @@ pub(crate) fn dress(
     collides: bool,
 ) -> Result<Dressed, AssembleError> {
     let worn = scene.garments();
-    let mut meshes = worn
+    let made = worn
         .iter()
-        .map(|w| build::garment_of(scene, w.garment, body.makehuman.as_ref()))
+        .map(|w| crate::garments::made(scene, w.garment, body.makehuman.as_ref()))
         .collect::<Result<Vec<_>, _>>()?;
+    let mut tied_own = Vec::with_capacity(made.len());
+    let mut meshes = Vec::with_capacity(made.len());
+    for m in made {
+        tied_own.push(m.tied);
+        meshes.push(m.mesh);
+    }
     let mut placed_moved = 0;
     let mut layered = vec![LayerPlacement::default(); meshes.len()];
     let mut pieces = vec![LayerPlacement::default(); meshes.len()];
     if collides {
         let thickness = scene.cloth.thickness;
-        let mut placer = ExactCollider::new(&body.mesh, thickness)?;
+        let mut placer = ExactCollider::new(body.start_mesh(), thickness)?;
         let gap = LAYER_GAP * scene.cloth.self_thickness;
         for (k, m) in meshes.iter_mut().enumerate() {
             placed_moved += garment_fit::place_outside(m, &mut placer);
@@ -141,8 +149,10 @@ pub(crate) fn dress(
     }
     let mut wear = Vec::new();
     let mut attachments = Vec::new();
+    let mut tied = Vec::new();
     let mut base = 0u32;
-    for (w, m) in worn.iter().zip(&meshes) {
+    for ((w, m), own) in worn.iter().zip(&meshes).zip(&tied_own) {
+        tied.extend(own.iter().map(|v| v + base));
         if matches!(w.garment, GarmentSection::Mhclo(_)) {
             for mut a in garment_fit::attach_small_pieces(m, SMALL_PIECE, 0.03) {
                 a.vertex += base;
@@ -167,6 +177,7 @@ pub(crate) fn dress(
         layered,
         pieces,
         attachments,
+        tied,
     })
 }
 

@@ -17,6 +17,7 @@
 
 pub mod embedded;
 mod fold;
+pub(crate) mod scene;
 mod stand;
 pub mod store;
 mod tie;
@@ -27,7 +28,7 @@ use std::time::Instant;
 use thiserror::Error;
 use tryon_core::frames::{BodyFrame, CoarseFrame};
 use tryon_core::math::{Real, Vec3};
-use tryon_core::measure::smoothstep;
+use tryon_core::measure::{Measurements, smoothstep};
 use tryon_core::mesh::PolyMesh;
 
 /// How the kimono is put on.
@@ -86,6 +87,8 @@ pub struct Worn {
     pub crossings: [usize; 3],
     /// Each held row's mean distance from its ring at the end (cord, band head, hem), m.
     pub row_lag_m: [Real; 3],
+    /// The vertices of the cord's and the band head's rows: what the cord holds.
+    pub tied: Vec<u32>,
     /// The lowest cloth point above the ankle landmark (m; negative: below it).
     pub hem_above_ankle_m: Real,
     pub frames: usize,
@@ -105,6 +108,19 @@ pub fn wear(
     s: &WearSettings,
     on_frame: &mut dyn FnMut(&str, usize, usize),
 ) -> Result<Worn, WearError> {
+    let m = stand::measurements(w);
+    wear_on(&m, w, flat, base, s, on_frame)
+}
+
+/// [`wear`] on the mannequin of measurements `m` (a scene's), the kimono tailored for `w`.
+pub fn wear_on(
+    m: &Measurements,
+    w: &kimono::Wearer,
+    flat: &[Vec3],
+    base: &KimonoMesh,
+    s: &WearSettings,
+    on_frame: &mut dyn FnMut(&str, usize, usize),
+) -> Result<Worn, WearError> {
     if flat.len() != base.positions.len() {
         return Err(WearError::Shape {
             found: flat.len(),
@@ -113,16 +129,23 @@ pub fn wear(
     }
     let d = kimono::tailor(w)?;
     let lv = kimono::Levels::new(&d)?;
-    let st = stand::stand(w)?;
-    // The fold line just over the shoulders, the kimono's plane at the torso's middle.
-    let hem = st.top + 0.012 - d.body_length;
+    let st = stand::stand(m)?;
+    // The fold line just over the shoulders, the kimono's plane at the torso's middle. Its
+    // vertices are found on the initial kimono: a fitted one's lie a few mm apart in height.
+    let fold_line = fold_line(base);
+    let fold_y = fold_line.iter().map(|&v| flat[v as usize].y).sum::<Real>()
+        / fold_line.len().max(1) as Real;
+    let hem = st.top + 0.012 - fold_y;
     let shift = Vec3::new(0.0, hem, st.zc);
     let rest: Vec<Vec3> = flat.iter().map(|p| p + shift).collect();
     // The back collar stands above the fold in the flat layout; it starts behind the neck.
+    // (Found on the initial kimono, as the fold line is.)
+    let top = fold_top(base);
     let start: Vec<Vec3> = rest
         .iter()
-        .map(|p| {
-            if p.y > st.top + 0.013 {
+        .zip(&base.positions)
+        .map(|(p, b)| {
+            if b.y > top + 0.001 {
                 Vec3::new(p.x, p.y, st.zc - 0.012)
             } else {
                 *p
@@ -147,9 +170,6 @@ pub fn wear(
         crate::build::solver(&scene, &garment, vec![], held, &[], &[])
             .map_err(|e| build_err("the cloth solver")(e.to_string()))
     };
-    let fold_line: Vec<u32> = (0..rest.len() as u32)
-        .filter(|&v| (rest[v as usize].y - st.top - 0.012).abs() < 1e-4)
-        .collect();
     let mut held_solver = solver(&fold_line)?;
     let mut free_solver = Some(solver(&[])?);
     const S0: Real = 0.03;
@@ -208,7 +228,7 @@ pub fn wear(
         dt,
     };
     let mut tie_solver = solver(&[])?;
-    let (tied_frames, row_lag_m) = tie::tie(
+    let (tied_frames, row_lag_m, tied) = tie::tie(
         &job,
         tie_solver.as_mut(),
         &mut frame,
@@ -229,9 +249,28 @@ pub fn wear(
         body: prev,
         body_triangles: st.triangles,
         row_lag_m,
+        tied,
         frames: steps,
         ms_per_frame: clock.elapsed().as_secs_f64() * 1e3 / steps.max(1) as Real,
     })
+}
+
+/// The height of the shoulders' fold line on the initial kimono `base` (laid flat, the fold line
+/// its highest row outside the collar).
+fn fold_top(base: &KimonoMesh) -> Real {
+    let collar = &base.sub_mesh_vertices()[kimono::mesh::sub::COLLAR as usize];
+    (0..base.positions.len() as u32)
+        .filter(|v| collar.binary_search(v).is_err())
+        .map(|v| base.positions[v as usize].y)
+        .fold(Real::NEG_INFINITY, Real::max)
+}
+
+/// The vertices on the shoulders' fold line of the initial kimono `base`.
+fn fold_line(base: &KimonoMesh) -> Vec<u32> {
+    let top = fold_top(base);
+    (0..base.positions.len() as u32)
+        .filter(|&v| (base.positions[v as usize].y - top).abs() < 1e-4)
+        .collect()
 }
 
 #[cfg(test)]
@@ -264,5 +303,79 @@ mod tests {
         )
         .unwrap_err();
         assert!(matches!(e, WearError::Shape { found: 5, .. }), "{e}");
+    }
+
+    #[test]
+    fn a_fitted_kimono_is_held_by_its_whole_fold_line_while_the_body_grows() {
+        // A fitted kimono's rows lie a few mm off the initial kimono's heights; its fold line
+        // must still be held from sleeve end to sleeve end (it once held only the rows that
+        // kept their height exactly, and the sleeves fell off the arms).
+        let w = kimono::Wearer::new(1.62, 0.84, 0.64, 0.90);
+        let fit = crate::kimono::fit_kimono(&w, crate::kimono::Targets::Flat).unwrap();
+        let base = &fit.family.base;
+        let line = fold_line(base);
+        let subs = base.sub_mesh_vertices();
+        let sleeves = [
+            kimono::mesh::sub::LEFT_SLEEVE,
+            kimono::mesh::sub::RIGHT_SLEEVE,
+        ];
+        let span = |vs: &mut dyn Iterator<Item = u32>| {
+            vs.map(|v| base.positions[v as usize].x)
+                .fold((Real::INFINITY, Real::NEG_INFINITY), |(a, b), x| {
+                    (a.min(x), b.max(x))
+                })
+        };
+        let sleeves: Vec<u32> = sleeves
+            .iter()
+            .flat_map(|&k| subs[k as usize].iter().copied())
+            .collect();
+        assert_eq!(
+            span(&mut line.iter().copied()),
+            span(&mut sleeves.iter().copied())
+        );
+        let off = line
+            .iter()
+            .map(|&v| (fit.positions[v as usize].y - base.positions[v as usize].y).abs())
+            .fold(0.0, Real::max);
+        assert!(off > 1e-3, "the fit moved the fold line by {off} m only");
+        let grow = WearSettings {
+            inflate_frames: 8,
+            settle_frames: 0,
+            tie_frames: 0,
+            hold_frames: 0,
+            ..WearSettings::default()
+        };
+        let worn = wear(&w, &fit.positions, base, &grow, &mut |_, _, _| {}).unwrap();
+        // Held, the whole line keeps its place: one shift for every vertex of it.
+        let moved = |v: u32| worn.positions[v as usize] - fit.positions[v as usize];
+        // (The sleeves' part of it: the fold lays the fronts' layers apart, and the fronts' corners
+        // at the armholes with them.)
+        let fronts = [
+            kimono::mesh::sub::LEFT_FRONT,
+            kimono::mesh::sub::RIGHT_FRONT,
+        ];
+        let on_sleeves: Vec<u32> = line
+            .iter()
+            .copied()
+            .filter(|v| sleeves.contains(v))
+            .filter(|v| {
+                fronts
+                    .iter()
+                    .all(|&k| subs[k as usize].binary_search(v).is_err())
+            })
+            .collect();
+        assert!(
+            on_sleeves.len() > 10,
+            "{} fold vertices on the sleeves",
+            on_sleeves.len()
+        );
+        let worst = on_sleeves
+            .iter()
+            .map(|&v| (moved(v) - moved(on_sleeves[0])).norm())
+            .fold(0.0, Real::max);
+        assert!(
+            worst < 1e-9,
+            "a fold line vertex moved {worst} m off the line's shift"
+        );
     }
 }

@@ -37,11 +37,11 @@ pub(crate) fn dress_pose(skeleton: &Skeleton) -> Pose {
     pose
 }
 
-/// The mannequin of `w`'s size, arms raised. Shoulder width, arm length and inseam follow the
-/// height as on the 1.65 m mannequin.
-pub(super) fn stand(w: &kimono::Wearer) -> Result<Stand, WearError> {
+/// The measurements of `w`'s mannequin: shoulder width, arm length and inseam follow the height
+/// as on the 1.65 m mannequin.
+pub(crate) fn measurements(w: &kimono::Wearer) -> Measurements {
     let sc = w.height / 1.65;
-    let m = Measurements {
+    Measurements {
         height: w.height,
         bust: w.bust,
         waist: w.waist,
@@ -49,7 +49,12 @@ pub(super) fn stand(w: &kimono::Wearer) -> Result<Stand, WearError> {
         shoulder_width: 0.38 * sc,
         arm_length: 0.56 * sc,
         inseam: 0.76 * sc,
-    };
+    }
+}
+
+/// The mannequin of measurements `m`, arms raised.
+pub(super) fn stand(m: &Measurements) -> Result<Stand, WearError> {
+    let m = *m;
     let man = Mannequin::new(&m)?;
     let pose = dress_pose(&man.skeleton);
     let triangles = man.mesh.triangulate().0;

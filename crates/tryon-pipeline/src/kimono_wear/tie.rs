@@ -202,15 +202,15 @@ fn plan(job: &TieJob, frame: &CoarseFrame) -> (Vec<u32>, Vec<Plan>, [usize; 3]) 
     (held, plans, sizes)
 }
 
-/// Ties the kimono; returns the frames stepped and each row's mean distance from its ring at the
-/// end (cord, band head, hem).
+/// Ties the kimono; returns the frames stepped, each row's mean distance from its ring at the
+/// end (cord, band head, hem) and the cord's and band head's rows' vertices.
 pub(super) fn tie(
     job: &TieJob,
     solver: &mut dyn ClothSolver,
     frame: &mut CoarseFrame,
     collider: &mut dyn Collider,
     on_frame: &mut dyn FnMut(&str, usize, usize),
-) -> (usize, [Real; 3]) {
+) -> (usize, [Real; 3], Vec<u32>) {
     let (held, plans, sizes) = plan(job, frame);
     let total = job.frames + job.hold_frames;
     // Where the rows start (what no frames of tying leaves them measured against).
@@ -232,5 +232,8 @@ pub(super) fn tie(
         lag[k] = d.sum::<Real>() / (*n).max(1) as Real;
         at += n;
     }
-    (total, lag)
+    let mut tied = held[..sizes[0] + sizes[1]].to_vec();
+    tied.sort_unstable();
+    tied.dedup();
+    (total, lag, tied)
 }

@@ -360,6 +360,12 @@ impl Scene {
                 quoted,
                 &format!("\"square\" on {body} body"),
             ),
+            b if b != "mannequin" && garment == "kimono" => wrong(
+                "garment",
+                "kind",
+                quoted,
+                "a mannequin ([body] kind = \"mannequin\"): the kimono is fitted to its measurements",
+            ),
             "makehuman" if matches!(garment, "dress" | "skirt" | "shirt") => wrong(
                 "garment",
                 "kind",
@@ -404,6 +410,7 @@ mod erased {
                 GarmentSection::Shirt(_) => "shirt",
                 GarmentSection::Square(_) => "square",
                 GarmentSection::Mhclo(_) => "mhclo",
+                GarmentSection::Kimono(_) => "kimono",
             }
         }
     }

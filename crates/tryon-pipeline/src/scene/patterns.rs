@@ -121,3 +121,34 @@ impl Default for ShirtSpec {
         }
     }
 }
+
+/// A kimono (P2) fitted to the mannequin's height, bust, waist and hip (the blend of the flat
+/// target shapes), put on the mannequin with its arms raised as the worn targets were, and tied;
+/// the body lowers its arms over `lead` seconds before the motion starts.
+#[derive(Clone, Debug, Deserialize, Serialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct KimonoSpec {
+    /// 裄 (back-neck centre to the wrist bone, m); absent, height x 0.4 + 0.02.
+    #[schemars(range(min = 0.55, max = 0.7))]
+    pub yuki: Option<Real>,
+    /// 袖丈: the sleeve's length (m; at most 75% of the height); absent, height x 0.3.
+    #[schemars(range(min = 0.35, max = 1.3))]
+    pub sleeve_length: Option<Real>,
+    /// Time the body takes to lower its arms from the pose the kimono was put on in (s).
+    #[schemars(range(min = 0.1, max = 10.0))]
+    pub lead: Real,
+    /// Frames the cord holds the kimono on the mannequin after tying it, before the scene starts.
+    #[schemars(range(max = 600))]
+    pub hold_frames: usize,
+}
+
+impl Default for KimonoSpec {
+    fn default() -> Self {
+        KimonoSpec {
+            yuki: None,
+            sleeve_length: None,
+            lead: 1.0,
+            hold_frames: 60,
+        }
+    }
+}

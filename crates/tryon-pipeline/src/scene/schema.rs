@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 use tryon_core::math::Real;
 use tryon_core::measure::Measurements;
 
-pub use super::patterns::{DressSpec, ShirtSpec, SkirtSpec};
+pub use super::patterns::{DressSpec, KimonoSpec, ShirtSpec, SkirtSpec};
 
 /// How fast and how long the scene runs.
 #[derive(Clone, Debug, Deserialize, Serialize, JsonSchema, PartialEq)]
@@ -232,6 +232,8 @@ pub enum GarmentSection {
     Square(SquareSpec),
     /// A MakeHuman garment (.mhclo binding and its OBJ) fitted onto the MakeHuman body.
     Mhclo(MhcloSpec),
+    /// A kimono (P2) fitted to the mannequin's measurements.
+    Kimono(KimonoSpec),
 }
 
 /// How one garment is worn among several (`[[garment]]`): its layer and its own material. Every
