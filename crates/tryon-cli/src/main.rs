@@ -28,8 +28,8 @@ enum Command {
         /// Output directory (scene.glb, preview.png, stats.json).
         #[arg(long, default_value = "out/demo")]
         out: PathBuf,
-        /// Simulate only this many frames (default: the scene's duration times its fps).
-        #[arg(long)]
+        /// Simulate only this many frames, at least 1 (default: the scene's duration times its fps).
+        #[arg(long, value_parser = frame_count)]
         frames: Option<usize>,
         /// No progress bar or summary.
         #[arg(long, short)]
@@ -45,8 +45,8 @@ enum Command {
         /// Output directory; default out/<scene name>.
         #[arg(long)]
         out: Option<PathBuf>,
-        /// Simulate only this many frames (default: the scene's duration times its fps).
-        #[arg(long)]
+        /// Simulate only this many frames, at least 1 (default: the scene's duration times its fps).
+        #[arg(long, value_parser = frame_count)]
         frames: Option<usize>,
         /// No progress bar or summary.
         #[arg(long, short)]
@@ -162,6 +162,17 @@ fn assemble(scene: Scene, file: &str) -> Result<Pipeline, Failure> {
         e @ tryon_pipeline::build::AssembleError::At { .. } => Failure::BadInput(e.to_string()),
         e => Failure::BadInput(format!("{file}: {e}")),
     })
+}
+
+/// `--frames`: a whole number of frames, at least 1.
+fn frame_count(s: &str) -> Result<usize, String> {
+    match s.parse::<usize>() {
+        Ok(0) => Err("a run has at least 1 frame".into()),
+        Ok(n) => Ok(n),
+        Err(_) => Err(format!(
+            "`{s}` is not a whole number of frames (at least 1)"
+        )),
+    }
 }
 
 fn run(mut p: Pipeline, out: &Path, frames: Option<usize>, quiet: bool) -> Result<(), Failure> {
@@ -296,7 +307,7 @@ fn main() -> ExitCode {
         } => Scene::load_with_overrides(&scene, &sets)
             .map_err(|e| Failure::BadInput(e.to_string()))
             .and_then(|s| {
-                let out = out.unwrap_or_else(|| PathBuf::from("out").join(&s.scene.name));
+                let out = out.unwrap_or_else(|| PathBuf::from("out").join(s.folder_name()));
                 assemble(s, &scene.display().to_string()).and_then(|p| run(p, &out, frames, quiet))
             }),
         Command::Inspect { file } => tryon_io::inspect::summarize(&file)
@@ -309,7 +320,7 @@ fn main() -> ExitCode {
             .map_err(|e| Failure::BadInput(e.to_string())),
         Command::Canvas { scene, out, sets } => load(&scene, &sets).and_then(|s| {
             let path =
-                out.unwrap_or_else(|| Path::new("out").join(&s.scene.name).join("canvas.png"));
+                out.unwrap_or_else(|| Path::new("out").join(s.folder_name()).join("canvas.png"));
             if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
                 std::fs::create_dir_all(dir).map_err(|e| {
                     Failure::Internal(format!("cannot create {}: {e}", dir.display()))
@@ -491,5 +502,17 @@ mod tests {
         let _ = std::fs::remove_dir_all(&dir);
         assert!(!before);
         assert_eq!(text.unwrap(), "*\n");
+    }
+
+    #[test]
+    fn zero_frames_and_non_numbers_are_refused() {
+        use clap::Parser;
+        for bad in ["0", "-1", "x", "1.5"] {
+            let arg = format!("--frames={bad}");
+            let e = Cli::try_parse_from(["tryon", "demo", arg.as_str()]).unwrap_err();
+            assert_eq!(e.kind(), clap::error::ErrorKind::ValueValidation, "{bad}");
+            assert!(e.to_string().contains("--frames"), "{e}");
+        }
+        assert!(Cli::try_parse_from(["tryon", "demo", "--frames", "3"]).is_ok());
     }
 }

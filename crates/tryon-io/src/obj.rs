@@ -32,9 +32,9 @@ pub fn parse_obj(text: &str, file: &Path) -> Result<ObjMesh, ReadError> {
                 if m.positions.len() >= MAX_OBJ_ELEMENTS {
                     return Err(at.limit("vertex count", MAX_OBJ_ELEMENTS));
                 }
-                let x = at.real(tok.next(), "vertex x")?;
-                let y = at.real(tok.next(), "vertex y")?;
-                let z = at.real(tok.next(), "vertex z")?;
+                let x = at.coordinate(tok.next(), "vertex x")?;
+                let y = at.coordinate(tok.next(), "vertex y")?;
+                let z = at.coordinate(tok.next(), "vertex z")?;
                 m.positions.push(Vec3::new(x, y, z));
             }
             "vt" => {
@@ -50,15 +50,10 @@ pub fn parse_obj(text: &str, file: &Path) -> Result<ObjMesh, ReadError> {
                 let mut ts = Vec::with_capacity(4);
                 for t in tok {
                     let mut parts = t.split('/');
-                    let v = resolve(&at, parts.next(), m.positions.len(), "vertex")?
+                    let v = resolve(&at, parts.next(), m.positions.len(), VERTEX)?
                         .ok_or_else(|| at.err("face corner without a vertex index"))?;
                     vs.push(v);
-                    ts.push(resolve(
-                        &at,
-                        parts.next(),
-                        m.uvs.len(),
-                        "texture coordinate",
-                    )?);
+                    ts.push(resolve(&at, parts.next(), m.uvs.len(), TEXTURE)?);
                 }
                 if vs.len() < 3 {
                     return Err(at.err(format!(
@@ -104,8 +99,17 @@ fn close_group(m: &mut ObjMesh, group: Option<(String, usize)>) {
     }
 }
 
+/// What an index counts, in the singular and the plural.
+const VERTEX: [&str; 2] = ["vertex", "vertices"];
+const TEXTURE: [&str; 2] = ["texture coordinate", "texture coordinates"];
+
 /// A 1-based (or negative, relative) OBJ index into `count` elements; `Ok(None)` when absent.
-fn resolve(at: &At, tok: Option<&str>, count: usize, what: &str) -> Result<Option<u32>, ReadError> {
+fn resolve(
+    at: &At,
+    tok: Option<&str>,
+    count: usize,
+    [what, many]: [&str; 2],
+) -> Result<Option<u32>, ReadError> {
     let Some(tok) = tok.filter(|t| !t.is_empty()) else {
         return Ok(None);
     };
@@ -115,7 +119,11 @@ fn resolve(at: &At, tok: Option<&str>, count: usize, what: &str) -> Result<Optio
     let idx = if i > 0 { i - 1 } else { count as i64 + i };
     if i == 0 || idx < 0 || idx >= count as i64 {
         return Err(at.err(format!(
-            "{what} index {i} is out of range: {count} {what}s are defined before this line"
+            "{what} index {i} is out of range: {count} {} defined before this line",
+            match count {
+                1 => format!("{what} is"),
+                _ => format!("{many} are"),
+            }
         )));
     }
     Ok(Some(idx as u32))
@@ -175,10 +183,21 @@ mod tests {
     fn malformed_files_name_the_line() {
         for (text, line, needle) in [
             ("v 0 0 0\nv 1 x 0\n", 2, "vertex y"),
-            ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", 4, "out of range"),
+            (
+                "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n",
+                4,
+                "3 vertices are defined",
+            ),
+            ("v 0 0 0\nf 1 2 3\n", 2, "1 vertex is defined"),
+            (
+                "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/2 3/1\n",
+                5,
+                "1 texture coordinate is",
+            ),
             ("v 0 0 0\nv 1 0 0\nf 1 2\n", 3, "at least 3"),
             ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 2\n", 4, "more than once"),
             ("v 0 0 nan\n", 1, "finite"),
+            ("v 0 0 0\nv 1e300 0 0\n", 2, "vertex x 1e300 is beyond"),
             (
                 "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/9 2 3\n",
                 4,

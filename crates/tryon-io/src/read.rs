@@ -127,6 +127,17 @@ impl At<'_> {
         }
     }
 
+    /// A mesh coordinate: a finite number within +-[`MAX_COORDINATE`].
+    pub fn coordinate(&self, tok: Option<&str>, what: &str) -> Result<f64, ReadError> {
+        let x = self.real(tok, what)?;
+        match x.abs() <= MAX_COORDINATE {
+            true => Ok(x),
+            false => Err(self.err(format!(
+                "{what} {x:e} is beyond +-1e6: no mesh in metres, centimetres or millimetres reaches it"
+            ))),
+        }
+    }
+
     /// A non-negative integer.
     pub fn index(&self, tok: Option<&str>, what: &str) -> Result<u32, ReadError> {
         let tok =
@@ -135,6 +146,9 @@ impl At<'_> {
             .map_err(|_| self.err(format!("expected {what} (a vertex index), found `{tok}`")))
     }
 }
+
+/// The largest mesh coordinate read (in the file's units).
+pub const MAX_COORDINATE: f64 = 1e6;
 
 /// Converts a serde_json error into a [`ReadError::Json`] for `file`.
 pub(crate) fn json_error(file: &Path, e: serde_json::Error) -> ReadError {

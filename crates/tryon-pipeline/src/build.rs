@@ -34,7 +34,8 @@ use tryon_core::stages::{BodyModel, ClothSolver, Collider, MotionSource, NoColli
 pub enum AssembleError {
     #[error("body: {0}")]
     Measurements(#[from] MeasureError),
-    #[error("body mesh: {0}")]
+    /// (Says "body mesh" or "body frame" itself.)
+    #[error(transparent)]
     Body(#[from] BodyError),
     #[error("garment: {0}")]
     Pattern(#[from] PatternError),
@@ -483,4 +484,22 @@ fn object_on_table(scene: &Scene, b: &ObjectBody) -> Result<PolyMesh, AssembleEr
 /// garments from each other (`cloth_collision` with more than one).
 pub fn self_contact_on(fx: &EffectsSection, garments: usize) -> bool {
     fx.self_collision || (fx.cloth_collision && garments > 1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use tryon_core::topology::TopologyError;
+
+    #[test]
+    fn a_body_mesh_error_says_body_mesh_once() {
+        let e = AssembleError::from(BodyError::Topology(TopologyError::NonManifoldEdge {
+            a: 1,
+            b: 2,
+            faces: vec![3, 4, 5],
+        }));
+        let text = e.to_string();
+        assert_eq!(text.matches("body mesh").count(), 1, "{text}");
+        assert!(text.starts_with("body mesh: edge (1, 2)"), "{text}");
+    }
 }

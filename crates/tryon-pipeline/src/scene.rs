@@ -105,6 +105,15 @@ pub fn line_of(text: &str, table: &str, key: &str) -> Option<usize> {
     line_of_nth(text, table, 0, key)
 }
 
+/// Line of a key as errors name it (`table.key`, or `table[n].key` in an array of tables).
+fn line_in(text: &str, key: &str) -> Option<usize> {
+    let (table, name) = key.rsplit_once('.')?;
+    match table.split_once('[') {
+        Some((t, n)) => line_of_nth(text, t, n.trim_end_matches(']').parse().ok()?, name),
+        None => line_of(text, table, name),
+    }
+}
+
 /// Line of `key` inside the `nth` (from 0) `[[table]]` of an array of tables, or inside
 /// `[table]` (`nth` = 0); the table header's line when the key is absent.
 pub fn line_of_nth(text: &str, table: &str, nth: usize, key: &str) -> Option<usize> {
@@ -151,6 +160,30 @@ pub struct Worn<'a> {
 }
 
 impl Scene {
+    /// The scene's name made a folder name (the default output folder is `out/` and this): every
+    /// character but letters, digits, `-`, `_` and `.` becomes `_`, leading dots are dropped and
+    /// it is cut at 100 characters, so a name is never a path (`"/abs/dir"`, `"../../x"`); an
+    /// empty result is `"scene"`.
+    pub fn folder_name(&self) -> String {
+        let kept: String = self
+            .scene
+            .name
+            .chars()
+            .map(
+                |c| match c.is_alphanumeric() || matches!(c, '-' | '_' | '.') {
+                    true => c,
+                    false => '_',
+                },
+            )
+            .skip_while(|&c| c == '.')
+            .take(100)
+            .collect();
+        match kept.is_empty() {
+            true => "scene".into(),
+            false => kept,
+        }
+    }
+
     /// Every garment in the order listed, with how it is worn.
     pub fn garments(&self) -> Vec<Worn<'_>> {
         static PLAIN: std::sync::OnceLock<WearSpec> = std::sync::OnceLock::new();
@@ -249,7 +282,33 @@ impl Scene {
             file.display(),
             sets.join(" ")
         ));
-        Scene::parse(&merged, &named)
+        // The merged text is the table written anew: its lines are not the file's. Name the
+        // file's own line of a key, and none for a key an override set.
+        Scene::parse(&merged, &named).map_err(|e| match e {
+            SceneError::Invalid {
+                file,
+                key,
+                value,
+                expected,
+                ..
+            } => {
+                let overridden = sets
+                    .iter()
+                    .any(|s| s.split_once('=').is_some_and(|(k, _)| k.trim() == key));
+                let line = match overridden {
+                    true => None,
+                    false => line_in(text, &key),
+                };
+                SceneError::Invalid {
+                    file,
+                    line,
+                    key,
+                    value,
+                    expected,
+                }
+            }
+            other => other,
+        })
     }
 
     /// Reads a scene file and applies `table.key=value` overrides.

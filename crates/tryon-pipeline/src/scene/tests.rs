@@ -393,3 +393,49 @@ fn garment_lists_and_contact_between_garments_are_checked() {
         "{e}"
     );
 }
+
+#[test]
+fn a_scenes_name_is_a_folder_name_never_a_path() {
+    let folder = |name: &str| {
+        let mut s = Scene::demo();
+        s.scene.name = name.into();
+        s.folder_name()
+    };
+    assert_eq!(folder("demo-dress-walk"), "demo-dress-walk");
+    assert_eq!(folder("/abs/dir"), "_abs_dir");
+    assert_eq!(folder("../../x"), "_.._x");
+    assert_eq!(folder(".."), "scene");
+    assert_eq!(folder(""), "scene");
+    assert_eq!(folder("a b\\c:d"), "a_b_c_d");
+    assert_eq!(folder("着物 walk"), "着物_walk");
+    assert_eq!(folder(&"x".repeat(300)).len(), 100);
+    for name in ["/abs/dir", "../../x", "..", "a/../../b", "C:\\x"] {
+        let f = folder(name);
+        let p = std::path::Path::new("out").join(&f);
+        assert_eq!(p.components().count(), 2, "{name} -> {f}");
+        assert!(
+            !f.contains('/') && !f.contains('\\') && f != "..",
+            "{name} -> {f}"
+        );
+    }
+}
+
+#[test]
+fn an_error_under_overrides_names_the_files_own_line_or_the_override() {
+    let text = "# a scene\n\n[scene]\nfps = 30\n\n[body]\nkind = \"mannequin\"\nheight = 9.0\n\n[garment]\nkind = \"dress\"\n\n[motion]\nkind = \"still\"\n";
+    let file = Path::new("s.toml");
+    let sets = ["effects.refine=1".to_string()];
+    let e = Scene::parse_with_overrides(text, file, &sets).unwrap_err();
+    let SceneError::Invalid { line, key, .. } = &e else {
+        panic!("{e}");
+    };
+    assert_eq!((key.as_str(), *line), ("body.height", Some(8)), "{e}");
+    let sets = ["effects.refine=9".to_string()];
+    let fixed = text.replace("height = 9.0", "height = 1.6");
+    let e = Scene::parse_with_overrides(&fixed, file, &sets).unwrap_err();
+    let SceneError::Invalid { line, key, .. } = &e else {
+        panic!("{e}");
+    };
+    assert_eq!((key.as_str(), *line), ("effects.refine", None), "{e}");
+    assert!(e.to_string().contains("--set effects.refine=9"), "{e}");
+}
