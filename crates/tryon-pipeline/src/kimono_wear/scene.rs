@@ -75,12 +75,7 @@ fn put_on(m: &Measurements, k: &KimonoSpec) -> Result<WornKimono, AssembleError>
         &fit.positions,
         &fit.family.base,
         &settings,
-        // Putting it on takes tens of seconds before the first frame: say how far it is.
-        &mut |act, f, n| {
-            if f == n || f.is_multiple_of(30) {
-                eprintln!("kimono: putting it on, {act} {f}/{n}");
-            }
-        },
+        &mut |_, _, _| {},
     )?;
     let mesh = PolyMesh::from_triangles(worn.positions, &fit.family.base.triangles)
         .map_err(|e| KimonoError::Output(e.to_string()))?;
