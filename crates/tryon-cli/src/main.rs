@@ -156,8 +156,14 @@ fn mark_generated(out: &Path) {
     }
 }
 
-fn assemble(scene: Scene, file: &str) -> Result<Pipeline, Failure> {
-    Pipeline::new(scene).map_err(|e| match e {
+fn assemble(scene: Scene, file: &str, quiet: bool) -> Result<Pipeline, Failure> {
+    // Long preparations (putting a kimono on) say how far they are instead of staying silent.
+    let say = |line: &str| {
+        if !quiet {
+            eprintln!("{line}");
+        }
+    };
+    Pipeline::with_progress(scene, &say).map_err(|e| match e {
         // Already placed at its file and line.
         e @ tryon_pipeline::build::AssembleError::At { .. } => Failure::BadInput(e.to_string()),
         e => Failure::BadInput(format!("{file}: {e}")),
@@ -296,7 +302,7 @@ fn main() -> ExitCode {
             quiet,
             sets,
         } => demo_scene(&sets)
-            .and_then(|s| assemble(s, "<embedded demo>"))
+            .and_then(|s| assemble(s, "<embedded demo>", quiet))
             .and_then(|p| run(p, &out, frames, quiet)),
         Command::Run {
             scene,
@@ -308,7 +314,8 @@ fn main() -> ExitCode {
             .map_err(|e| Failure::BadInput(e.to_string()))
             .and_then(|s| {
                 let out = out.unwrap_or_else(|| PathBuf::from("out").join(s.folder_name()));
-                assemble(s, &scene.display().to_string()).and_then(|p| run(p, &out, frames, quiet))
+                assemble(s, &scene.display().to_string(), quiet)
+                    .and_then(|p| run(p, &out, frames, quiet))
             }),
         Command::Inspect { file } => tryon_io::inspect::summarize(&file)
             .map(|text| {
@@ -365,7 +372,7 @@ fn main() -> ExitCode {
             quiet,
         ),
         Command::Check { scene, sets } => load(&scene, &sets).and_then(|s| {
-            let p = assemble(s, &scene.display().to_string())?;
+            let p = assemble(s, &scene.display().to_string(), false)?;
             println!(
                 "{}: ok: scene `{}`, {} frames at {} fps, {} garment particles, stages: {}",
                 scene.display(),

@@ -4,7 +4,7 @@
 
 use crate::build;
 pub use crate::build::AssembleError;
-use crate::pipeline::Pipeline;
+use crate::pipeline::{Pipeline, Progress};
 use crate::scene::{CollisionMethod, GarmentSection, Scene};
 use body_collide::{Bands, BodyFollower, BodyMesh, ExactCollider, FollowParams};
 use cloth_dyn::Handle;
@@ -18,6 +18,12 @@ use tryon_core::stages::{Collider, Follower, SurfaceStage};
 impl Pipeline {
     /// Builds every enabled stage of `scene`.
     pub fn new(scene: Scene) -> Result<Pipeline, AssembleError> {
+        Pipeline::with_progress(scene, &|_| {})
+    }
+
+    /// [`Pipeline::new`], telling `progress` how far a long preparation is (putting a kimono on
+    /// takes tens of seconds before the first frame): one line at a time, no newline.
+    pub fn with_progress(scene: Scene, progress: Progress) -> Result<Pipeline, AssembleError> {
         let fx = scene.effects.clone();
         let thickness = scene.cloth.thickness;
         let body = build::body(&scene)?;
@@ -25,7 +31,7 @@ impl Pipeline {
         let collides = fx.body_collision != CollisionMethod::None;
         // The garments, each placed clear of the body (judged with the cloth's thickness) and
         // of the layers under it, joined into one cloth.
-        let dressed = crate::wardrobe::dress(&scene, &body, collides)?;
+        let dressed = crate::wardrobe::dress(&scene, &body, collides, progress)?;
         // Folds drawn on the garment (P3): the mesh subdivided and shaped before the cloth is built.
         let (dressed, folds) = crate::folding::apply(&scene, &body.mesh, dressed)?;
         let (garment, placed_moved) = (dressed.mesh.clone(), dressed.placed_moved);

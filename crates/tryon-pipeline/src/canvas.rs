@@ -118,7 +118,7 @@ fn nearest_hit(ray: &Ray, (x, tris): (&[Vec3], &[[u32; 3]])) -> Option<Real> {
 pub fn picture(scene: &Scene) -> Result<(Canvas, Image), AssembleError> {
     let body = crate::build::body(scene)?;
     let collides = scene.effects.body_collision != crate::scene::CollisionMethod::None;
-    let dressed = crate::wardrobe::dress(scene, &body, collides)?;
+    let dressed = crate::wardrobe::dress(scene, &body, collides, &|_| {})?;
     let (draped, body) = drape(scene, &body.mesh, &dressed)?;
     let mut garment = dressed.mesh;
     if let Some(x) = draped {

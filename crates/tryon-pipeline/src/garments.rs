@@ -79,7 +79,7 @@ pub fn garment_of(
     garment: &GarmentSection,
     makehuman: Option<&body_model::MakeHumanBody>,
 ) -> Result<PolyMesh, AssembleError> {
-    made(scene, garment, makehuman).map(|g| g.mesh)
+    made(scene, garment, makehuman, &|_| {}).map(|g| g.mesh)
 }
 
 /// A garment as made, before it is placed.
@@ -94,6 +94,7 @@ pub(crate) fn made(
     scene: &Scene,
     garment: &GarmentSection,
     makehuman: Option<&body_model::MakeHumanBody>,
+    progress: crate::Progress,
 ) -> Result<Made, AssembleError> {
     let m = match &scene.body {
         BodySection::Mannequin(b) => b.measurements(),
@@ -116,7 +117,7 @@ pub(crate) fn made(
             if !matches!(scene.body, BodySection::Mannequin(_)) {
                 return Err(AssembleError::KimonoBody);
             }
-            let worn = crate::kimono_wear::scene::garment(&m, k)?;
+            let worn = crate::kimono_wear::scene::garment(&m, k, progress)?;
             tied = worn.tied;
             worn.mesh
         }

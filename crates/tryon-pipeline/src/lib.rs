@@ -29,7 +29,7 @@ pub mod wardrobe;
 pub use assemble::AssembleError;
 pub use drape::{DrapeConfig, DrapeError, DrapeReport, DrapeScene, FrameTrace};
 pub use export::{ExportError, Outputs};
-pub use pipeline::{LoopState, Pipeline};
+pub use pipeline::{LoopState, Pipeline, Progress};
 pub use real::AssetError;
 pub use run::{FrameRecord, FrameSink, RunHeader, RunOutput, RunSummary, Stats};
 pub use scene::{DEMO_SCENE, Scene, SceneError};

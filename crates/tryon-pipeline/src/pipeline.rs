@@ -26,6 +26,9 @@ pub const BODY_STEP: Real = 0.08;
 /// Most sub-frames a frame is split into for a fast body.
 pub const MAX_BODY_PARTS: usize = 8;
 
+/// Where a long preparation reports how far it is: one line of text at a time.
+pub type Progress<'a> = &'a (dyn Fn(&str) + Sync);
+
 /// A scene ready to run: the stage objects and the state they share between frames.
 pub struct Pipeline {
     pub scene: Scene,

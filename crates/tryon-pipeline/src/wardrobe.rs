@@ -101,11 +101,12 @@ pub(crate) fn dress(
     scene: &Scene,
     body: &BuiltBody,
     collides: bool,
+    progress: crate::Progress,
 ) -> Result<Dressed, AssembleError> {
     let worn = scene.garments();
     let made = worn
         .iter()
-        .map(|w| crate::garments::made(scene, w.garment, body.makehuman.as_ref()))
+        .map(|w| crate::garments::made(scene, w.garment, body.makehuman.as_ref(), progress))
         .collect::<Result<Vec<_>, _>>()?;
     let mut tied_own = Vec::with_capacity(made.len());
     let mut meshes = Vec::with_capacity(made.len());

@@ -40,14 +40,18 @@ const MEMO_LEN: usize = 8;
 
 /// The kimono fitted to the mannequin of `m` and put on it (once per process for each wearer and
 /// setting).
-pub(crate) fn garment(m: &Measurements, k: &KimonoSpec) -> Result<WornKimono, AssembleError> {
+pub(crate) fn garment(
+    m: &Measurements,
+    k: &KimonoSpec,
+    progress: crate::Progress,
+) -> Result<WornKimono, AssembleError> {
     let key = format!("{m:?} {k:?}");
     // One at a time: a second scene of the same wearer waits for the first instead of repeating it.
     let mut memo = WORN.lock().unwrap_or_else(|e| e.into_inner());
     if let Some((_, w)) = memo.iter().find(|(name, _)| *name == key) {
         return Ok(w.clone());
     }
-    let worn = put_on(m, k)?;
+    let worn = put_on(m, k, progress)?;
     if memo.len() >= MEMO_LEN {
         memo.remove(0);
     }
@@ -55,7 +59,11 @@ pub(crate) fn garment(m: &Measurements, k: &KimonoSpec) -> Result<WornKimono, As
     Ok(worn)
 }
 
-fn put_on(m: &Measurements, k: &KimonoSpec) -> Result<WornKimono, AssembleError> {
+fn put_on(
+    m: &Measurements,
+    k: &KimonoSpec,
+    progress: crate::Progress,
+) -> Result<WornKimono, AssembleError> {
     let w = kimono::Wearer {
         height: m.height,
         bust: m.bust,
@@ -75,7 +83,11 @@ fn put_on(m: &Measurements, k: &KimonoSpec) -> Result<WornKimono, AssembleError>
         &fit.positions,
         &fit.family.base,
         &settings,
-        &mut |_, _, _| {},
+        &mut |act, f, n| {
+            if f == n || f % 15 == 0 {
+                progress(&format!("kimono: putting it on, {act} {f}/{n}"));
+            }
+        },
     )?;
     let mesh = PolyMesh::from_triangles(worn.positions, &fit.family.base.triangles)
         .map_err(|e| KimonoError::Output(e.to_string()))?;
