@@ -163,11 +163,15 @@ fn assemble(scene: Scene, file: &str, quiet: bool) -> Result<Pipeline, Failure> 
             eprintln!("{line}");
         }
     };
-    Pipeline::with_progress(scene, &say).map_err(|e| match e {
+    let p = Pipeline::with_progress(scene, &say).map_err(|e| match e {
         // Already placed at its file and line.
         e @ tryon_pipeline::build::AssembleError::At { .. } => Failure::BadInput(e.to_string()),
         e => Failure::BadInput(format!("{file}: {e}")),
-    })
+    })?;
+    for w in &p.warnings {
+        eprintln!("warning: {w}");
+    }
+    Ok(p)
 }
 
 /// `--frames`: a whole number of frames, at least 1.

@@ -205,6 +205,150 @@ impl PolyMesh {
     }
 }
 
+/// What [`PolyMesh::welded`] changed: how many vertices were merged into others and how many
+/// faces were dropped as slivers (no area left, or a corner repeated once merged).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Welding {
+    pub merged_vertices: usize,
+    pub dropped_faces: usize,
+}
+
+impl Welding {
+    /// Whether the mesh was changed.
+    pub fn changed(&self) -> bool {
+        self.merged_vertices + self.dropped_faces > 0
+    }
+}
+
+impl PolyMesh {
+    /// The mesh with duplicate vertices (within [`PolyMesh::validate`]'s tolerance, 1e-9 of the
+    /// bounding-box diagonal) merged into the lowest-numbered of them, faces with no area dropped,
+    /// and vertices no face uses removed. A quad that loses a corner becomes a triangle. Indices
+    /// out of range are left for `validate` to name.
+    pub fn welded(&self) -> (PolyMesh, Welding) {
+        let eps = 1e-9 * self.bbox_diagonal().max(Real::MIN_POSITIVE);
+        let root = self.duplicate_roots(eps);
+        let merged_vertices = root.iter().enumerate().filter(|(i, r)| *i != **r).count();
+        let mut faces = Vec::with_capacity(self.faces.len());
+        for f in &self.faces {
+            let mut vs: Vec<u32> = Vec::with_capacity(4);
+            for &v in f.vertices() {
+                let v = root.get(v as usize).map_or(v, |&r| r as u32);
+                if !vs.contains(&v) {
+                    vs.push(v);
+                }
+            }
+            let face = match vs[..] {
+                [a, b, c] => Face::Tri([a, b, c]),
+                [a, b, c, d] => Face::Quad([a, b, c, d]),
+                _ => continue,
+            };
+            faces.push(face);
+        }
+        let mut mesh = PolyMesh {
+            positions: self.positions.clone(),
+            faces,
+        };
+        let n = mesh.positions.len();
+        let in_range = |f: &Face| f.vertices().iter().all(|&v| (v as usize) < n);
+        mesh.faces = (0..mesh.faces.len())
+            .filter(|&fi| !in_range(&mesh.faces[fi]) || mesh.face_area(fi) > eps * eps)
+            .map(|fi| mesh.faces[fi])
+            .collect();
+        let dropped_faces = self.faces.len() - mesh.faces.len();
+        (
+            mesh.without_unused(),
+            Welding {
+                merged_vertices,
+                dropped_faces,
+            },
+        )
+    }
+
+    /// The volume the faces enclose, positive when they face outward (for a closed mesh; an open
+    /// one gives the volume of the cone from the origin, a hint at best).
+    pub fn signed_volume(&self) -> Real {
+        let p = &self.positions;
+        let n = p.len();
+        self.triangulate()
+            .0
+            .iter()
+            .filter(|t| t.iter().all(|&v| (v as usize) < n))
+            .map(|&[a, b, c]| p[a as usize].dot(&p[b as usize].cross(&p[c as usize])) / 6.0)
+            .sum()
+    }
+
+    /// The mesh with every face's order reversed (front and back swapped).
+    pub fn flipped(mut self) -> PolyMesh {
+        for f in &mut self.faces {
+            match f {
+                Face::Tri(t) => t.reverse(),
+                Face::Quad(q) => q.reverse(),
+            }
+        }
+        self
+    }
+
+    /// For each vertex, the lowest-numbered vertex within `eps` of it, through chains of such.
+    fn duplicate_roots(&self, eps: Real) -> Vec<usize> {
+        let p = &self.positions;
+        let mut root: Vec<usize> = (0..p.len()).collect();
+        fn find(root: &mut [usize], mut v: usize) -> usize {
+            while root[v] != v {
+                root[v] = root[root[v]];
+                v = root[v];
+            }
+            v
+        }
+        let mut order: Vec<usize> = (0..p.len()).collect();
+        order.sort_by(|&a, &b| p[a].x.total_cmp(&p[b].x));
+        for (k, &a) in order.iter().enumerate() {
+            for &b in &order[k + 1..] {
+                if !(p[b].x - p[a].x <= eps) {
+                    break;
+                }
+                if (p[a] - p[b]).norm() <= eps {
+                    let (ra, rb) = (find(&mut root, a), find(&mut root, b));
+                    root[ra.max(rb)] = ra.min(rb);
+                }
+            }
+        }
+        (0..p.len()).map(|v| find(&mut root, v)).collect()
+    }
+
+    /// The mesh without the vertices no face uses (indices renumbered, order kept).
+    fn without_unused(self) -> PolyMesh {
+        let n = self.positions.len();
+        let mut used = vec![false; n];
+        for f in &self.faces {
+            for &v in f.vertices() {
+                if let Some(u) = used.get_mut(v as usize) {
+                    *u = true;
+                }
+            }
+        }
+        if used.iter().all(|&u| u) {
+            return self;
+        }
+        let mut new_index = vec![u32::MAX; n];
+        let mut positions = Vec::new();
+        for (v, p) in self.positions.iter().enumerate().filter(|(v, _)| used[*v]) {
+            new_index[v] = positions.len() as u32;
+            positions.push(*p);
+        }
+        let remap = |v: u32| new_index.get(v as usize).copied().unwrap_or(v);
+        let faces = self
+            .faces
+            .iter()
+            .map(|f| match *f {
+                Face::Tri(t) => Face::Tri(t.map(remap)),
+                Face::Quad(q) => Face::Quad(q.map(remap)),
+            })
+            .collect();
+        PolyMesh { positions, faces }
+    }
+}
+
 /// An `nx` by `nz` grid of quads (`(nx+1) * (nz+1)` vertices) of the given size in the XZ plane at
 /// height `y`, centred on the Y axis; vertex (i, j) has index `j * (nx + 1) + i`. Faces point up (+Y).
 pub fn grid_xz(nx: usize, nz: usize, size_x: Real, size_z: Real, y: Real) -> PolyMesh {
@@ -299,5 +443,41 @@ mod tests {
         ));
         let msg = m.validate().unwrap_err().to_string();
         assert!(msg.contains("vertices 2 and 4"), "{msg}");
+    }
+
+    #[test]
+    fn welding_merges_seams_and_drops_slivers_to_a_valid_mesh() {
+        // Two quads side by side, each with its own copy of the shared edge (a seam), a
+        // triangle whose corners collapse once welded, and a vertex no face uses.
+        let mut m = grid_xz(1, 1, 1.0, 1.0, 0.0);
+        let shift = Vec3::new(1.0, 0.0, 0.0);
+        let copy: Vec<Vec3> = m.positions.iter().map(|p| p + shift).collect();
+        m.positions.extend(copy);
+        m.faces.push(Face::Quad([4, 6, 7, 5]));
+        m.positions.push(m.positions[3]); // 8 = a duplicate of 3
+        m.faces.push(Face::Tri([3, 8, 2])); // zero area once 8 is 3
+        m.positions.push(Vec3::new(9.0, 9.0, 9.0)); // 9 unused
+        assert!(m.validate().is_err());
+        let (w, report) = m.welded();
+        w.validate().unwrap();
+        // The copy's x = 0.5 corners 4 and 6 fall on 1 and 3; 8 on 3.
+        assert_eq!(report.merged_vertices, 3);
+        assert_eq!(report.dropped_faces, 1);
+        assert_eq!(w.positions.len(), 6);
+        assert_eq!(w.faces.len(), 2);
+        // A valid mesh is left as it was.
+        let g = grid_xz(3, 2, 1.0, 1.0, 0.0);
+        let (same, none) = g.welded();
+        assert_eq!(same, g);
+        assert!(!none.changed());
+    }
+
+    #[test]
+    fn a_closed_meshs_volume_is_positive_facing_out_and_flips_sign() {
+        // A 2 x 0.5 x 2 box: volume 2.
+        let slab = crate::shapes::table_slab(2.0, 0.5, 3);
+        let v = slab.signed_volume();
+        assert!((v - 2.0).abs() < 1e-12, "{v}");
+        assert!((slab.flipped().signed_volume() + 2.0).abs() < 1e-12);
     }
 }

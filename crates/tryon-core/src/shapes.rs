@@ -145,22 +145,11 @@ mod tests {
     use super::*;
     use crate::topology::Topology;
 
-    /// Signed volume enclosed by a mesh (positive when its faces wind outward).
-    fn volume(m: &PolyMesh) -> Real {
-        let (tris, _) = m.triangulate();
-        tris.iter()
-            .map(|t| {
-                let [a, b, c] = t.map(|v| m.positions[v as usize]);
-                a.dot(&b.cross(&c)) / 6.0
-            })
-            .sum()
-    }
-
     #[test]
     fn table_slab_is_closed_outward_and_its_top_is_at_zero() {
         let m = table_slab(1.5, 0.04, 7);
         assert!(Topology::build(&m).unwrap().is_closed());
-        let v = volume(&m);
+        let v = m.signed_volume();
         assert!((v - 1.5 * 1.5 * 0.04).abs() < 1e-9, "volume {v}");
         let top = m.positions.iter().map(|p| p.y).fold(Real::MIN, Real::max);
         assert_eq!(top, 0.0);
@@ -174,7 +163,7 @@ mod tests {
         assert_eq!(m.positions.len(), 642);
         let t = Topology::build(&m).unwrap();
         assert!(t.is_closed());
-        let volume = volume(&m);
+        let volume = m.signed_volume();
         let exact = 4.0 / 3.0 * std::f64::consts::PI * 0.027;
         assert!(
             volume > 0.95 * exact && volume < exact,

@@ -124,6 +124,7 @@ impl Pipeline {
             referee,
             garment,
             placed_moved,
+            warnings: body.warnings,
             wear: dressed.wear,
             layered: dressed.layered,
             pieces: dressed.pieces,

@@ -6,7 +6,7 @@ use crate::real;
 use crate::scene::BroadPhaseName;
 use crate::scene::{
     BodySection, CollisionMethod, EffectsSection, GarmentSection, IntegratorName, MannequinBody,
-    MaterialName, MotionSection, ObjectBody, Scene, SolverName, XpbdBendingName,
+    MaterialName, MotionSection, Scene, SolverName, XpbdBendingName,
 };
 use body_collide::{
     BodyError, DepthMapCollider, ExactCollider, NearestVertexCollider, SdfCollider,
@@ -24,8 +24,8 @@ use mocap_retarget::{ArmRaise, ClipError, Walk, WalkParams};
 use thiserror::Error;
 use tryon_core::math::{Real, Vec3};
 use tryon_core::measure::MeasureError;
-use tryon_core::mesh::{Face, PolyMesh};
-use tryon_core::shapes::{icosphere, table_slab};
+use tryon_core::mesh::PolyMesh;
+use tryon_core::shapes::icosphere;
 use tryon_core::stages::{BodyModel, ClothSolver, Collider, MotionSource, NoCollider, StaticBody};
 
 /// Why a scene could not be assembled (after it parsed and passed its range checks).
@@ -34,6 +34,8 @@ use tryon_core::stages::{BodyModel, ClothSolver, Collider, MotionSource, NoColli
 pub enum AssembleError {
     #[error("body: {0}")]
     Measurements(#[from] MeasureError),
+    #[error("{file}: the object has no faces (`f` lines) to stand on the table")]
+    EmptyObject { file: String },
     /// (Says "body mesh" or "body frame" itself.)
     #[error(transparent)]
     Body(#[from] BodyError),
@@ -117,6 +119,8 @@ pub(crate) struct BuiltBody {
     /// The body in the motion's first pose where that is not the rest pose (a kimono's lead-in):
     /// the garment is placed against it and the collider starts from it.
     pub start: Option<PolyMesh>,
+    /// What was mended in the input and how (a welded OBJ), for the user to read.
+    pub warnings: Vec<String>,
 }
 
 impl BuiltBody {
@@ -140,6 +144,7 @@ fn fixed(mesh: PolyMesh, clip_len: Real) -> BuiltBody {
         clip_len,
         retarget: None,
         start: None,
+        warnings: Vec::new(),
     }
 }
 
@@ -154,7 +159,13 @@ pub(crate) fn body(scene: &Scene) -> Result<BuiltBody, AssembleError> {
             let mesh = icosphere(s.radius, s.subdivisions, Vec3::zeros());
             fixed(mesh, still.unwrap_or(2.0))
         }
-        BodySection::Object(o) => fixed(object_on_table(scene, o)?, still.unwrap_or(3.0)),
+        BodySection::Object(o) => {
+            let (mesh, warnings) = crate::object::object_on_table(scene, o)?;
+            BuiltBody {
+                warnings,
+                ..fixed(mesh, still.unwrap_or(3.0))
+            }
+        }
         BodySection::Mannequin(m) => mannequin(scene, m)?,
         BodySection::Makehuman(spec) => {
             let b = real::makehuman_body(scene, spec)?;
@@ -175,6 +186,7 @@ pub(crate) fn body(scene: &Scene) -> Result<BuiltBody, AssembleError> {
                     mesh,
                     makehuman: None,
                     start: None,
+                    warnings: Vec::new(),
                 }
             } else {
                 fixed(mesh, still.unwrap_or(2.0))
@@ -263,6 +275,7 @@ fn mannequin(scene: &Scene, spec: &MannequinBody) -> Result<BuiltBody, AssembleE
         clip_len,
         retarget,
         start,
+        warnings: Vec::new(),
     })
 }
 
@@ -442,42 +455,6 @@ pub fn collider(
         }
         CollisionMethod::None => Box::new(NoCollider),
     })
-}
-
-/// P4's scene body: the scene's OBJ scaled to metres, centred over the origin and standing on a
-/// closed table slab whose top is y = 0.
-fn object_on_table(scene: &Scene, b: &ObjectBody) -> Result<PolyMesh, AssembleError> {
-    let path = real::resolve(scene, "body.file", &b.file)?;
-    let obj = tryon_io::read_obj(&path).map_err(real::AssetError::from)?;
-    let scale = b.scale;
-    let mut mesh = PolyMesh {
-        positions: obj.positions.iter().map(|p| p * scale).collect(),
-        faces: obj.faces,
-    };
-    let (mut lo, mut hi) = (
-        Vec3::repeat(Real::INFINITY),
-        Vec3::repeat(Real::NEG_INFINITY),
-    );
-    for p in &mesh.positions {
-        lo = lo.inf(p);
-        hi = hi.sup(p);
-    }
-    let shift = Vec3::new(-(lo.x + hi.x) / 2.0, -lo.y, -(lo.z + hi.z) / 2.0);
-    for p in &mut mesh.positions {
-        *p += shift;
-    }
-    let side = b.table;
-    if side > 0.0 {
-        let cells = ((side / 0.03).ceil() as usize).clamp(2, 200);
-        let slab = table_slab(side, 0.04, cells);
-        let base = mesh.positions.len() as u32;
-        mesh.positions.extend_from_slice(&slab.positions);
-        mesh.faces.extend(slab.faces.iter().map(|f| match f {
-            Face::Tri(t) => Face::Tri(t.map(|v| v + base)),
-            Face::Quad(q) => Face::Quad(q.map(|v| v + base)),
-        }));
-    }
-    Ok(mesh)
 }
 
 /// Whether the cloth keeps apart from itself: its own pieces (`self_collision`), or several

@@ -19,6 +19,7 @@ pub mod hold;
 pub mod kimono;
 pub mod kimono_wear;
 pub mod metrics;
+mod object;
 pub mod pipeline;
 pub mod real;
 pub mod run;

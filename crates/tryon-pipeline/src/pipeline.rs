@@ -61,6 +61,8 @@ pub struct Pipeline {
     pub garment: PolyMesh,
     /// Garment vertices moved out of the body when placing it.
     pub placed_moved: usize,
+    /// What was mended in the input while assembling (a welded OBJ), for the user to read.
+    pub warnings: Vec<String>,
     /// Each garment's vertices in `garment`, layer and material (one entry per garment).
     pub wear: Vec<cloth_dyn::wear::GarmentWear>,
     /// What wearing each garment over the lower layers moved (one per garment).

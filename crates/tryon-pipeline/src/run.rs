@@ -176,6 +176,9 @@ pub struct Stats {
     pub metrics: Metrics,
     /// Wall time of the whole frame loop, s.
     pub loop_s: Real,
+    /// What was mended in the input while assembling (absent when nothing was).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
     pub per_frame: Vec<FrameStats>,
 }
 
@@ -308,6 +311,7 @@ impl Pipeline {
             ..Stats::default()
         };
         stats.metrics.placement_moved = self.placed_moved;
+        stats.warnings.clone_from(&self.warnings);
         stats.metrics.garments = self.wear.len().max(1);
         stats.metrics.layer_placement_moved = self.layered.iter().map(|l| l.moved).sum();
         stats.metrics.layer_placement_farthest_m =
