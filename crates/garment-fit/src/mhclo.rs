@@ -27,6 +27,16 @@ pub enum FitError {
         body_vertex: u32,
         count: usize,
     },
+    #[error(
+        "binding `{name}`: {key} names body vertex {body_vertex}, beyond the body's {count} (0..={last})",
+        last = count.saturating_sub(1)
+    )]
+    KeyOutOfRange {
+        name: String,
+        key: &'static str,
+        body_vertex: u32,
+        count: usize,
+    },
     #[error("binding `{name}`: the fitted garment is not a valid mesh: {source}")]
     Mesh {
         name: String,
@@ -56,6 +66,7 @@ pub fn binding_scales(b: &ClothBinding, body: &[Vec3]) -> [Real; 3] {
 
 /// The garment's vertex positions on `body` (all base vertices, helpers included).
 pub fn fit_positions(b: &ClothBinding, body: &[Vec3]) -> Result<Vec<Vec3>, FitError> {
+    check_keys(b, body.len())?;
     let s = binding_scales(b, body);
     let mut out = Vec::with_capacity(b.refs.len());
     for (i, (r, w)) in b.refs.iter().zip(&b.weights).enumerate() {
@@ -75,6 +86,27 @@ pub fn fit_positions(b: &ClothBinding, body: &[Vec3]) -> Result<Vec<Vec3>, FitEr
         out.push(p + Vec3::new(d.x * s[0], d.y * s[1], d.z * s[2]));
     }
     Ok(out)
+}
+
+/// The body vertices the binding names outside `verts` (the scale references, `delete_verts`)
+/// exist on a body of `count` vertices.
+fn check_keys(b: &ClothBinding, count: usize) -> Result<(), FitError> {
+    let scales = b.scales.iter().zip(["x_scale", "y_scale", "z_scale"]);
+    let scale_vertices =
+        scales.flat_map(|(r, key)| r.iter().flat_map(move |r| [(key, r.a), (key, r.b)]));
+    let deleted = b.delete_verts.iter().map(|&v| ("delete_verts", v));
+    match scale_vertices
+        .chain(deleted)
+        .find(|&(_, v)| v as usize >= count)
+    {
+        Some((key, body_vertex)) => Err(FitError::KeyOutOfRange {
+            name: b.name.clone(),
+            key,
+            body_vertex,
+            count,
+        }),
+        None => Ok(()),
+    }
 }
 
 /// The garment mesh (faces of `obj`, positions fitted on `body`).
@@ -111,6 +143,33 @@ pub fn fit_garment_outside(
 mod tests {
     use super::*;
     use tryon_core::assets::ScaleRef;
+
+    #[test]
+    fn scale_references_and_deleted_vertices_off_the_body_are_errors_naming_the_key() {
+        let body = vec![Vec3::zeros(), Vec3::x(), Vec3::y()];
+        let mut b = ClothBinding {
+            name: "g".into(),
+            refs: vec![[0, 1, 2]],
+            weights: vec![[0.2, 0.3, 0.5]],
+            offsets: vec![Vec3::zeros()],
+            ..ClothBinding::default()
+        };
+        assert!(fit_positions(&b, &body).is_ok());
+        b.delete_verts = vec![1, 4_000_000_000];
+        let e = fit_positions(&b, &body).unwrap_err().to_string();
+        assert!(
+            e.contains("delete_verts names body vertex 4000000000, beyond the body's 3 (0..=2)"),
+            "{e}"
+        );
+        b.delete_verts.clear();
+        b.scales[1] = Some(tryon_core::assets::ScaleRef {
+            a: 0,
+            b: 7,
+            rest: 1.0,
+        });
+        let e = fit_positions(&b, &body).unwrap_err().to_string();
+        assert!(e.contains("y_scale names body vertex 7"), "{e}");
+    }
 
     #[test]
     fn weights_mix_references_and_offsets_scale_with_the_body() {

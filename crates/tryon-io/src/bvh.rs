@@ -2,7 +2,7 @@
 //! joint, end sites) and the MOTION block, with LF or CRLF line ends. Units are converted to metres
 //! at load, either as the caller says or guessed from the figure's size ([`guess_unit`]).
 
-use crate::read::{At, ReadError, read_text};
+use crate::read::{At, ReadError, read_text, short};
 use std::path::Path;
 use tryon_core::assets::MotionClip;
 use tryon_core::math::{Real, UnitQuat, Vec3};
@@ -255,15 +255,6 @@ pub fn parse_bvh(text: &str, file: &Path) -> Result<BvhFile, ReadError> {
         }
     }
     Ok(f)
-}
-
-/// A number as a person reads it: exponent form when it is huge or tiny.
-fn short(v: Real) -> String {
-    if v != 0.0 && !(1e-4..1e6).contains(&v.abs()) {
-        format!("{v:e}")
-    } else {
-        format!("{v}")
-    }
 }
 
 fn ch_name(c: Channel) -> &'static str {

@@ -2,7 +2,7 @@
 //! or proxy bindings (.mhclo, .proxy). MakeHuman works in decimetres; everything is converted to
 //! metres here. Vertex indices refer to base.obj's own vertex order (read it with [`crate::read_obj`]).
 
-use crate::read::{At, ReadError, json_error, read_text};
+use crate::read::{At, ReadError, json_error, read_text, short};
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -280,6 +280,7 @@ fn binding_line(at: &At, toks: &[&str], b: &mut ClothBinding) -> Result<(), Read
                 w[k] = at.real(Some(toks[3 + k]), "a weight")?;
                 d[k] = at.real(Some(toks[6 + k]), "an offset")? * MH_UNIT;
             }
+            check_bound(at, w, d)?;
             b.refs.push(r);
             b.weights.push(w);
             b.offsets.push(d);
@@ -293,6 +294,41 @@ fn binding_line(at: &At, toks: &[&str], b: &mut ClothBinding) -> Result<(), Read
     Ok(())
 }
 
+/// A bound vertex's weights mix its three body vertices (they sum to 1: MakeHuman writes them to
+/// five decimals) and its offset is a garment's distance from the body, not kilometres.
+fn check_bound(at: &At, w: [f64; 3], d: Vec3) -> Result<(), ReadError> {
+    let sum = w[0] + w[1] + w[2];
+    if (sum - 1.0).abs() > MAX_WEIGHT_SUM_ERROR {
+        return Err(at.err(format!(
+            "the weights {} {} {} sum to {}; a bound vertex's weights sum to 1 (within {MAX_WEIGHT_SUM_ERROR})",
+            short(w[0]),
+            short(w[1]),
+            short(w[2]),
+            short((sum * 1e5).round() / 1e5)
+        )));
+    }
+    if let Some(x) = w.iter().find(|x| x.abs() > MAX_WEIGHT) {
+        return Err(at.err(format!(
+            "a weight of {} is out of range (-{MAX_WEIGHT}..={MAX_WEIGHT})",
+            short(*x)
+        )));
+    }
+    if d.amax() > MAX_OFFSET_M {
+        return Err(at.err(format!(
+            "an offset of {:.3e} m is out of range (at most {MAX_OFFSET_M} m from the body)",
+            d.amax()
+        )));
+    }
+    Ok(())
+}
+
+/// How far a bound vertex's weights may sum from 1.
+const MAX_WEIGHT_SUM_ERROR: f64 = 0.01;
+/// The largest weight accepted (MakeHuman's garments use -0.9 to 2.7).
+const MAX_WEIGHT: f64 = 100.0;
+/// The largest offset from the body accepted, m (MakeHuman's garments use up to 0.22).
+const MAX_OFFSET_M: f64 = 10.0;
+
 /// One `delete_verts` line: indices and `a - b` ranges.
 fn delete_line(at: &At, toks: &[&str], out: &mut Vec<u32>) -> Result<(), ReadError> {
     let mut k = 0;
@@ -303,9 +339,15 @@ fn delete_line(at: &At, toks: &[&str], out: &mut Vec<u32>) -> Result<(), ReadErr
             if b < a || (b - a) as usize > MAX_MH_ENTRIES {
                 return Err(at.err(format!("bad vertex range {a} - {b}")));
             }
+            if out.len() + (b - a) as usize >= MAX_MH_ENTRIES {
+                return Err(at.limit("deleted vertex count", MAX_MH_ENTRIES));
+            }
             out.extend(a..=b);
             k += 3;
         } else {
+            if out.len() >= MAX_MH_ENTRIES {
+                return Err(at.limit("deleted vertex count", MAX_MH_ENTRIES));
+            }
             out.push(a);
             k += 1;
         }
@@ -420,5 +462,35 @@ mod tests {
         assert!(e.to_string().contains("1 or 9 numbers"), "{e}");
         let e = parse_binding("name g\n", p()).unwrap_err();
         assert!(e.to_string().contains("no bound vertices"), "{e}");
+    }
+
+    #[test]
+    fn bindings_with_weights_that_do_not_mix_or_offsets_far_away_are_refused_at_their_line() {
+        let head = "name g\nverts 0\n";
+        for (line, says) in [
+            ("1 2 3 0 0 0 0 0 0", "sum to 0;"),
+            ("1 2 3 0.5 0.2 0.2 0 0 0", "sum to 0.9"),
+            ("1 2 3 1e30 0 0 0 0 0", "the weights 1e30 0 0 sum to 1e30"),
+            (
+                "1 2 3 -200 100.5 100.5 0 0 0",
+                "a weight of -200 is out of range",
+            ),
+            (
+                "1 2 3 0.2 0.3 0.5 0 0 1e6",
+                "an offset of 1.000e5 m is out of range",
+            ),
+        ] {
+            let e = parse_binding(&format!("{head}{line}\n"), p()).unwrap_err();
+            assert_eq!(e.line(), Some(3), "{e}");
+            assert!(e.to_string().contains(says), "{line}: {e}");
+        }
+        // MakeHuman's own rounding (five decimals) passes.
+        parse_binding(&format!("{head}1 2 3 0.33333 0.33333 0.33333 0 0 0\n"), p()).unwrap();
+        let e = parse_binding(
+            "name g\nverts 0\n5\ndelete_verts\n0 - 9000000 0 - 9000000\n",
+            p(),
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("deleted vertex count"), "{e}");
     }
 }

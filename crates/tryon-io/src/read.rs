@@ -165,3 +165,12 @@ pub(crate) fn json_error(file: &Path, e: serde_json::Error) -> ReadError {
         },
     }
 }
+
+/// A number as a person reads it: exponent form when it is huge or tiny.
+pub(crate) fn short(v: f64) -> String {
+    if v != 0.0 && !(1e-4..1e6).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
