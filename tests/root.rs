@@ -1,6 +1,7 @@
 //! Integration tests over the public APIs: the drape scene end to end, the hard cases of the
 //! foundation (a jumping body, a cloth that starts inside the body, bad meshes), determinism.
 
+mod budgets;
 mod cloth_cloth;
 mod end_to_end;
 mod folds;

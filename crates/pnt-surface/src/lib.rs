@@ -16,7 +16,7 @@ pub mod refine;
 pub mod stage;
 
 pub use pn::PnPatch;
-pub use refine::{PnRefiner, RefineError};
+pub use refine::{PnRefiner, RefineError, fine_vertex_count};
 pub use stage::PnStage;
 
 #[cfg(test)]

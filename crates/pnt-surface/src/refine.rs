@@ -57,6 +57,14 @@ pub fn point_level(level: u8, i: u32, j: u32) -> u8 {
     level - tz(i).min(tz(j)) as u8
 }
 
+/// Fine vertices of a coarse mesh of `vertices`, `edges` and `triangles` refined at `level`:
+/// its vertices, `2^level - 1` on each edge and the lattice's inner points on each triangle.
+pub fn fine_vertex_count(vertices: usize, edges: usize, triangles: usize, level: u8) -> usize {
+    let n = 1usize << level.min(MAX_LEVEL);
+    let inner = (n - 1) * n.saturating_sub(2) / 2;
+    vertices + edges * (n - 1) + triangles * inner
+}
+
 impl PnRefiner {
     /// Builds the fine topology of `coarse` at `level` (validating the coarse mesh).
     pub fn new(coarse: &PolyMesh, level: u8) -> Result<Self, RefineError> {
@@ -76,8 +84,7 @@ impl PnRefiner {
                 edges.entry((a.min(b), a.max(b))).or_insert(len);
             }
         }
-        let inner = (n as usize - 1) * (n as usize).saturating_sub(2) / 2;
-        let count = nv + edges.len() * (n as usize - 1) + tris.len() * inner;
+        let count = fine_vertex_count(nv, edges.len(), tris.len(), level);
         if count > MAX_FINE_VERTICES {
             return Err(RefineError::TooMany {
                 level,

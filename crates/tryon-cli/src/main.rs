@@ -3,12 +3,17 @@
 //! Exit codes: 0 success, 2 bad input (the message names the file, line, key or value), 1 an
 //! internal error (an output that could not be written, a failed export).
 
+mod report;
+
 use clap::{Parser, Subcommand};
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use std::io::IsTerminal;
+use report::run;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use tryon_pipeline::{Pipeline, Scene};
+use tryon_pipeline::budget::Limits;
+use tryon_pipeline::{Options, Pipeline, Scene};
+
+/// The exit status of a `--strict` run whose garment left the body.
+const LEFT_THE_BODY: u8 = 3;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -21,6 +26,49 @@ struct Cli {
     command: Command,
 }
 
+/// How a run is made, shared by `demo` and `run`.
+#[derive(clap::Args, Debug)]
+struct RunFlags {
+    /// Simulate only this many frames, at least 1 (default: the scene's duration times its fps).
+    #[arg(long, value_parser = frame_count)]
+    frames: Option<usize>,
+    /// No progress bar or summary.
+    #[arg(long, short)]
+    quiet: bool,
+    /// Exit with status 3 when the garment left the body (stats.json's detached_share over 0),
+    /// after writing every output.
+    #[arg(long)]
+    strict: bool,
+    #[command(flatten)]
+    budget: BudgetFlags,
+}
+
+/// The limits a scene's estimate is held against before it runs.
+#[derive(clap::Args, Debug)]
+struct BudgetFlags {
+    /// Raise (or lower) a limit the scene's estimate is held against before it runs, e.g.
+    /// `--limit hours=12` (repeatable; keys: frames, particles, fine_vertices, substeps,
+    /// memory_gb, hours).
+    #[arg(long = "limit", value_name = "KEY=VALUE", value_parser = limit_arg)]
+    limits: Vec<String>,
+}
+
+impl BudgetFlags {
+    fn limits(&self) -> Limits {
+        let mut l = Limits::default();
+        for a in &self.limits {
+            // Checked as the arguments were parsed.
+            let _ = l.set(a);
+        }
+        l
+    }
+}
+
+/// `--limit`: one `KEY=VALUE` the limits take.
+fn limit_arg(s: &str) -> Result<String, String> {
+    Limits::default().set(s).map(|()| s.to_string())
+}
+
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Run the embedded default: the mannequin in a dress, walking (no files needed).
@@ -28,12 +76,8 @@ enum Command {
         /// Output directory (scene.glb, preview.png, stats.json).
         #[arg(long, default_value = "out/demo")]
         out: PathBuf,
-        /// Simulate only this many frames, at least 1 (default: the scene's duration times its fps).
-        #[arg(long, value_parser = frame_count)]
-        frames: Option<usize>,
-        /// No progress bar or summary.
-        #[arg(long, short)]
-        quiet: bool,
+        #[command(flatten)]
+        flags: RunFlags,
         /// Override a value of the embedded scene, e.g. `--set effects.wrinkles=true` (repeatable).
         #[arg(long = "set", value_name = "TABLE.KEY=VALUE")]
         sets: Vec<String>,
@@ -45,12 +89,8 @@ enum Command {
         /// Output directory; default out/<scene name>.
         #[arg(long)]
         out: Option<PathBuf>,
-        /// Simulate only this many frames, at least 1 (default: the scene's duration times its fps).
-        #[arg(long, value_parser = frame_count)]
-        frames: Option<usize>,
-        /// No progress bar or summary.
-        #[arg(long, short)]
-        quiet: bool,
+        #[command(flatten)]
+        flags: RunFlags,
         /// Override a scene value, e.g. `--set effects.body_collision=sdf` (repeatable).
         #[arg(long = "set", value_name = "TABLE.KEY=VALUE")]
         sets: Vec<String>,
@@ -63,6 +103,8 @@ enum Command {
         /// Override a scene value before checking, as `run --set` does (repeatable).
         #[arg(long = "set", value_name = "TABLE.KEY=VALUE")]
         sets: Vec<String>,
+        #[command(flatten)]
+        budget: BudgetFlags,
     },
     /// Write the picture folds are drawn on (P3): the scene's garment as dressed on the body at
     /// the start, framed as the preview frames it, at `[output] preview_width` x `preview_height`.
@@ -125,6 +167,8 @@ enum Command {
 enum Failure {
     BadInput(String),
     Internal(String),
+    /// A `--strict` run whose garment left the body (the summary said so).
+    LeftTheBody,
 }
 
 fn load(path: &Path, sets: &[String]) -> Result<Scene, Failure> {
@@ -156,14 +200,25 @@ fn mark_generated(out: &Path) {
     }
 }
 
-fn assemble(scene: Scene, file: &str, quiet: bool) -> Result<Pipeline, Failure> {
+fn assemble(
+    scene: Scene,
+    file: &str,
+    quiet: bool,
+    budget: &BudgetFlags,
+    frames: Option<usize>,
+) -> Result<Pipeline, Failure> {
     // Long preparations (putting a kimono on) say how far they are instead of staying silent.
     let say = |line: &str| {
         if !quiet {
             eprintln!("{line}");
         }
     };
-    let p = Pipeline::with_progress(scene, &say).map_err(|e| match e {
+    let options = Options {
+        progress: &say,
+        limits: budget.limits(),
+        frames,
+    };
+    let p = Pipeline::with_options(scene, &options).map_err(|e| match e {
         // Already placed at its file and line.
         e @ tryon_pipeline::build::AssembleError::At { .. } => Failure::BadInput(e.to_string()),
         e => Failure::BadInput(format!("{file}: {e}")),
@@ -172,6 +227,16 @@ fn assemble(scene: Scene, file: &str, quiet: bool) -> Result<Pipeline, Failure> 
         eprintln!("warning: {w}");
     }
     Ok(p)
+}
+
+/// Runs `scene` as `flags` ask; with `--strict`, a garment that left the body fails the run.
+fn run_scene(scene: Scene, file: &str, out: &Path, flags: &RunFlags) -> Result<(), Failure> {
+    let p = assemble(scene, file, flags.quiet, &flags.budget, flags.frames)?;
+    let left = run(p, out, flags.frames, flags.quiet)?;
+    if left && flags.strict {
+        return Err(Failure::LeftTheBody);
+    }
+    Ok(())
 }
 
 /// `--frames`: a whole number of frames, at least 1.
@@ -183,94 +248,6 @@ fn frame_count(s: &str) -> Result<usize, String> {
             "`{s}` is not a whole number of frames (at least 1)"
         )),
     }
-}
-
-fn run(mut p: Pipeline, out: &Path, frames: Option<usize>, quiet: bool) -> Result<(), Failure> {
-    let total = frames.unwrap_or(p.frames);
-    let bar = ProgressBar::new(total as u64);
-    if quiet || !std::io::stderr().is_terminal() {
-        bar.set_draw_target(ProgressDrawTarget::hidden());
-    }
-    bar.set_style(
-        ProgressStyle::with_template(
-            "{prefix} [{bar:40}] {pos}/{len} frames, {elapsed} elapsed, eta {eta}",
-        )
-        .unwrap_or_else(|_| ProgressStyle::default_bar())
-        .progress_chars("=> "),
-    );
-    bar.set_prefix(p.scene.scene.name.clone());
-    let result = p.run_to(out, frames, |k, _| bar.set_position(k as u64));
-    bar.finish_and_clear();
-    mark_generated(out);
-    let (stats, files) = result.map_err(|e| Failure::Internal(e.to_string()))?;
-    if !quiet {
-        let s = &stats;
-        let m = &s.metrics;
-        println!(
-            "{}: {} frames at {} fps in {:.1} s ({} coarse particles, {} body vertices, {} substep {:.5} s, collider {})",
-            s.scene,
-            s.frames,
-            s.fps,
-            s.loop_s,
-            s.counts.coarse_vertices,
-            s.counts.body_vertices,
-            s.integrator,
-            s.substep_s,
-            s.collider
-        );
-        println!(
-            "penetration max {:.2} mm, p99 {:.2} mm; stretch {:.3}..{:.3}, mean {:.3}; detached {}; retries {}, rollbacks {}, non-finite {}",
-            m.max_penetration_m * 1e3,
-            m.p99_penetration_m * 1e3,
-            m.min_stretch,
-            m.max_stretch,
-            m.mean_stretch,
-            percent(m.detached_share),
-            m.substep_retries,
-            m.rollbacks,
-            m.non_finite_events
-        );
-        if let Some(r) = s.retarget.filter(|r| r.arm_frames_moved > 0) {
-            println!(
-                "retargeting turned an upper arm in {} of the clip's frames (counted per arm; at most {:.0} degrees) to keep the arms off the hips and the hands off the head",
-                r.arm_frames_moved, r.max_arm_turn_deg
-            );
-        }
-        if !m.fold_retention.is_empty() {
-            let list = |v: &[Option<f64>]| {
-                v.iter()
-                    .map(|r| r.map_or("?".into(), |r| format!("{r:.2}")))
-                    .collect::<Vec<String>>()
-                    .join(", ")
-            };
-            println!(
-                "folds: height over the drawn height {} at the end ({} as shaped)",
-                list(&m.fold_retention),
-                list(&m.fold_retention_shaped)
-            );
-        }
-        if m.detached_share > 0.0 {
-            let worst = s
-                .per_frame
-                .iter()
-                .max_by(|a, b| a.detached_share.total_cmp(&b.detached_share))
-                .map_or(0, |f| f.frame);
-            eprintln!(
-                "warning: at frame {worst}, {} of the garment's vertices had left the body: more than 10 cm farther from it than at the start, and torn off, slid off what held them or fallen (stats.json per_frame has every frame)",
-                percent(m.detached_share)
-            );
-        }
-        for (name, t) in &s.stages {
-            println!(
-                "  {name:<16} {:8.3} ms mean {:8.3} ms max",
-                t.ms_mean, t.ms_max
-            );
-        }
-        for f in files {
-            println!("wrote {}", f.display());
-        }
-    }
-    Ok(())
 }
 
 /// The joint-naming scheme retargeting will use for a BVH or .mhskel file, if one fits.
@@ -300,26 +277,19 @@ fn naming_scheme(file: &Path) -> Option<&'static str> {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Demo {
-            out,
-            frames,
-            quiet,
-            sets,
-        } => demo_scene(&sets)
-            .and_then(|s| assemble(s, "<embedded demo>", quiet))
-            .and_then(|p| run(p, &out, frames, quiet)),
+        Command::Demo { out, flags, sets } => {
+            demo_scene(&sets).and_then(|s| run_scene(s, "<embedded demo>", &out, &flags))
+        }
         Command::Run {
             scene,
             out,
-            frames,
-            quiet,
+            flags,
             sets,
         } => Scene::load_with_overrides(&scene, &sets)
             .map_err(|e| Failure::BadInput(e.to_string()))
             .and_then(|s| {
                 let out = out.unwrap_or_else(|| PathBuf::from("out").join(s.folder_name()));
-                assemble(s, &scene.display().to_string(), quiet)
-                    .and_then(|p| run(p, &out, frames, quiet))
+                run_scene(s, &scene.display().to_string(), &out, &flags)
             }),
         Command::Inspect { file } => tryon_io::inspect::summarize(&file)
             .map(|text| {
@@ -375,8 +345,13 @@ fn main() -> ExitCode {
             &out,
             quiet,
         ),
-        Command::Check { scene, sets } => load(&scene, &sets).and_then(|s| {
-            let p = assemble(s, &scene.display().to_string(), false)?;
+        Command::Check {
+            scene,
+            sets,
+            budget,
+        } => load(&scene, &sets).and_then(|s| {
+            let p = assemble(s, &scene.display().to_string(), false, &budget, None)?;
+            let e = &p.estimate;
             println!(
                 "{}: ok: scene `{}`, {} frames at {} fps, {} garment particles, stages: {}",
                 scene.display(),
@@ -385,6 +360,14 @@ fn main() -> ExitCode {
                 p.fps,
                 p.garment.positions.len(),
                 p.stages().join(", ")
+            );
+            println!(
+                "estimate: {} substeps a frame x {} sweeps, {} fine vertices; peak memory about {:.2} GB, run time about {:.1} min (rough: docs/decisions.md)",
+                e.substeps,
+                e.iterations,
+                e.fine_vertices,
+                e.memory_gb,
+                e.hours * 60.0
             );
             Ok(())
         }),
@@ -399,6 +382,7 @@ fn main() -> ExitCode {
             eprintln!("internal error: {m}");
             ExitCode::from(1)
         }
+        Err(Failure::LeftTheBody) => ExitCode::from(LEFT_THE_BODY),
     }
 }
 
@@ -461,19 +445,6 @@ fn kimono(
     Ok(())
 }
 
-/// A share as a percentage with enough digits that a small one does not read as 0.0%.
-fn percent(share: f64) -> String {
-    let pct = share * 100.0;
-    let digits = if pct == 0.0 || pct >= 1.0 {
-        1
-    } else if pct >= 0.1 {
-        2
-    } else {
-        3
-    };
-    format!("{pct:.digits$}%")
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -493,10 +464,10 @@ mod tests {
 
     #[test]
     fn a_small_share_does_not_print_as_zero() {
-        assert_eq!(percent(0.0), "0.0%");
-        assert_eq!(percent(0.000188), "0.019%");
-        assert_eq!(percent(0.0025), "0.25%");
-        assert_eq!(percent(0.5), "50.0%");
+        assert_eq!(report::percent(0.0), "0.0%");
+        assert_eq!(report::percent(0.000188), "0.019%");
+        assert_eq!(report::percent(0.0025), "0.25%");
+        assert_eq!(report::percent(0.5), "50.0%");
     }
 
     #[test]
@@ -525,5 +496,34 @@ mod tests {
             assert!(e.to_string().contains("--frames"), "{e}");
         }
         assert!(Cli::try_parse_from(["tryon", "demo", "--frames", "3"]).is_ok());
+    }
+
+    #[test]
+    fn a_strict_run_whose_garment_falls_off_fails_with_its_own_status_after_writing() {
+        // A sheet over a sphere it does not collide with falls past it.
+        let text = "[scene]\nduration = 1.0\n[body]\nkind = \"sphere\"\n[garment]\nkind = \"square\"\nparticles = 6\n[effects]\nbody_collision = \"none\"\n";
+        let scene = Scene::parse(text, Path::new("t.toml")).unwrap_or_else(|e| panic!("{e}"));
+        let out = std::env::temp_dir().join(format!("tryon-cli-strict-{}", std::process::id()));
+        let flags = |strict| RunFlags {
+            frames: None,
+            quiet: true,
+            strict,
+            budget: BudgetFlags { limits: Vec::new() },
+        };
+        assert!(run_scene(scene.clone(), "t.toml", &out, &flags(false)).is_ok());
+        let strict = run_scene(scene, "t.toml", &out, &flags(true));
+        let written = out.join("stats.json").exists();
+        let _ = std::fs::remove_dir_all(&out);
+        assert!(matches!(strict, Err(Failure::LeftTheBody)));
+        assert!(written);
+    }
+
+    #[test]
+    fn limits_are_checked_as_arguments() {
+        use clap::Parser;
+        let e = Cli::try_parse_from(["tryon", "demo", "--limit", "speed=3"]).unwrap_err();
+        assert!(e.to_string().contains("`speed` is not a limit"), "{e}");
+        let ok = Cli::try_parse_from(["tryon", "check", "x.toml", "--limit", "hours=9"]);
+        assert!(ok.is_ok());
     }
 }

@@ -2,9 +2,10 @@
 //! A disabled effect leaves no stage object and no term in the solver. The builders are in
 //! `build.rs`; this file orders them and places the garment.
 
+use crate::budget;
 use crate::build;
 pub use crate::build::AssembleError;
-use crate::pipeline::{Pipeline, Progress};
+use crate::pipeline::{Options, Pipeline};
 use crate::scene::{CollisionMethod, GarmentSection, Scene};
 use body_collide::{Bands, BodyFollower, BodyMesh, ExactCollider, FollowParams};
 use cloth_dyn::Handle;
@@ -18,12 +19,13 @@ use tryon_core::stages::{Collider, Follower, SurfaceStage};
 impl Pipeline {
     /// Builds every enabled stage of `scene`.
     pub fn new(scene: Scene) -> Result<Pipeline, AssembleError> {
-        Pipeline::with_progress(scene, &|_| {})
+        Pipeline::with_options(scene, &Options::default())
     }
 
-    /// [`Pipeline::new`], telling `progress` how far a long preparation is (putting a kimono on
-    /// takes tens of seconds before the first frame): one line at a time, no newline.
-    pub fn with_progress(scene: Scene, progress: Progress) -> Result<Pipeline, AssembleError> {
+    /// [`Pipeline::new`] with `options`: progress told how far a long preparation is, and the
+    /// run's estimate held against the limits before the costly stages are built.
+    pub fn with_options(scene: Scene, options: &Options) -> Result<Pipeline, AssembleError> {
+        let progress = options.progress;
         let fx = scene.effects.clone();
         let thickness = scene.cloth.thickness;
         let body = build::body(&scene)?;
@@ -61,6 +63,16 @@ impl Pipeline {
             &dressed.wear,
             &folds.bends,
         )?;
+        let fps = scene.scene.fps;
+        let duration = scene
+            .scene
+            .duration
+            .unwrap_or(scene.scene.settle + body.clip_len);
+        let frames = (duration * fps).round().max(1.0) as usize;
+        let substep = solver.info().nominal_substep;
+        let estimate =
+            budget::estimate(&scene, &garment, substep, options.frames.unwrap_or(frames));
+        budget::check(&estimate, &options.limits)?;
         let collider = collides
             .then(|| build::collider(fx.body_collision, body.start_mesh(), thickness, &fx))
             .transpose()?;
@@ -93,12 +105,6 @@ impl Pipeline {
             }),
             _ => None,
         };
-        let fps = scene.scene.fps;
-        let duration = scene
-            .scene
-            .duration
-            .unwrap_or(scene.scene.settle + body.clip_len);
-        let frames = (duration * fps).round().max(1.0) as usize;
         let mut cloth = solver.initial_frame();
         if let Some(start) = folds
             .start
@@ -125,6 +131,7 @@ impl Pipeline {
             garment,
             placed_moved,
             warnings: body.warnings,
+            estimate,
             wear: dressed.wear,
             layered: dressed.layered,
             pieces: dressed.pieces,

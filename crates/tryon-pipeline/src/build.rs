@@ -34,6 +34,8 @@ use tryon_core::stages::{BodyModel, ClothSolver, Collider, MotionSource, NoColli
 pub enum AssembleError {
     #[error("body: {0}")]
     Measurements(#[from] MeasureError),
+    #[error(transparent)]
+    Budget(#[from] crate::budget::BudgetError),
     #[error("{file}: the object has no faces (`f` lines) to stand on the table")]
     EmptyObject { file: String },
     /// (Says "body mesh" or "body frame" itself.)

@@ -8,6 +8,7 @@
 //! export, drape; timers and metrics are leaves.
 
 pub mod assemble;
+pub mod budget;
 pub mod build;
 pub mod canvas;
 pub mod crossings;
@@ -30,7 +31,7 @@ pub mod wardrobe;
 pub use assemble::AssembleError;
 pub use drape::{DrapeConfig, DrapeError, DrapeReport, DrapeScene, FrameTrace};
 pub use export::{ExportError, Outputs};
-pub use pipeline::{LoopState, Pipeline, Progress};
+pub use pipeline::{LoopState, Options, Pipeline, Progress};
 pub use real::AssetError;
 pub use run::{FrameRecord, FrameSink, RunHeader, RunOutput, RunSummary, Stats};
 pub use scene::{DEMO_SCENE, Scene, SceneError};

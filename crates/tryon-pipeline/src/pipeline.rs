@@ -29,6 +29,36 @@ pub const MAX_BODY_PARTS: usize = 8;
 /// Where a long preparation reports how far it is: one line of text at a time.
 pub type Progress<'a> = &'a (dyn Fn(&str) + Sync);
 
+/// How a pipeline is built beyond its scene.
+#[derive(Clone, Copy)]
+pub struct Options<'a> {
+    /// Told how far a long preparation is (putting a kimono on takes tens of seconds).
+    pub progress: Progress<'a>,
+    /// What the run may take, checked before the costly stages are built.
+    pub limits: crate::budget::Limits,
+    /// Frames the run will make when not the scene's own (the command line's `--frames`).
+    pub frames: Option<usize>,
+}
+
+impl std::fmt::Debug for Options<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Options")
+            .field("limits", &self.limits)
+            .field("frames", &self.frames)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Default for Options<'_> {
+    fn default() -> Self {
+        Options {
+            progress: &|_| {},
+            limits: crate::budget::Limits::default(),
+            frames: None,
+        }
+    }
+}
+
 /// A scene ready to run: the stage objects and the state they share between frames.
 pub struct Pipeline {
     pub scene: Scene,
@@ -63,6 +93,8 @@ pub struct Pipeline {
     pub placed_moved: usize,
     /// What was mended in the input while assembling (a welded OBJ), for the user to read.
     pub warnings: Vec<String>,
+    /// What the run was estimated to take before it was built.
+    pub estimate: crate::budget::Estimate,
     /// Each garment's vertices in `garment`, layer and material (one entry per garment).
     pub wear: Vec<cloth_dyn::wear::GarmentWear>,
     /// What wearing each garment over the lower layers moved (one per garment).

@@ -41,7 +41,7 @@ pub enum SceneError {
         column: usize,
         message: String,
     },
-    #[error("{}:{}: `{key}` = {value}: expected {expected}", file.display(), line.map_or("?".to_string(), |l| l.to_string()))]
+    #[error("{}{}: `{key}` = {value}: expected {expected}", file.display(), line.map_or(String::new(), |l| format!(":{l}")))]
     Invalid {
         file: PathBuf,
         /// Line of the key, or of its table when the key was left out.

@@ -1,0 +1,345 @@
+//! Budgets checked before a run starts: frames, particles, fine vertices, substeps per frame,
+//! memory and time are estimated from the scene as assembled so far and held against limits, so
+//! that no accepted scene runs for hours or exhausts memory by accident. Each limit can be raised
+//! (`tryon run --limit KEY=VALUE`); the error names the scene key that drives the estimate.
+//!
+//! The memory and time models are rough, fitted on this project's release build on a 2-core
+//! machine (docs/decisions.md, session 57): a run's peak memory is about 50 MB plus 4 kB per
+//! particle, 1.2 kB per fine vertex, 22 B per signed-distance cell and 58 B per depth-map pixel;
+//! a frame costs about 1 us per particle, substep and solver iteration plus 8 us per fine vertex
+//! (the surface stages and the exact referee).
+
+use crate::scene::{CollisionMethod, Scene, SolverName};
+use thiserror::Error;
+use tryon_core::math::Real;
+use tryon_core::mesh::PolyMesh;
+
+/// The limits a scene's estimate is held against.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Limits {
+    pub frames: usize,
+    pub particles: usize,
+    pub fine_vertices: usize,
+    pub substeps: usize,
+    pub memory_gb: Real,
+    pub hours: Real,
+}
+
+impl Default for Limits {
+    /// Sized for a workstation like this project's (2 cores, 23 GB): the largest shipped scene
+    /// estimates under a tenth of each.
+    fn default() -> Self {
+        Limits {
+            frames: 200_000,
+            particles: 150_000,
+            fine_vertices: 4_000_000,
+            substeps: 2_000,
+            memory_gb: 8.0,
+            hours: 4.0,
+        }
+    }
+}
+
+/// The keys `--limit` takes, with what each bounds.
+pub const LIMIT_KEYS: &str =
+    "frames, particles, fine_vertices, substeps (a frame), memory_gb, hours";
+
+impl Limits {
+    /// Applies one `KEY=VALUE` (the command line's `--limit`).
+    pub fn set(&mut self, assignment: &str) -> Result<(), String> {
+        let (key, value) = assignment.split_once('=').ok_or_else(|| {
+            format!("`{assignment}`: expected KEY=VALUE, KEY one of {LIMIT_KEYS}")
+        })?;
+        let number: Real = value
+            .trim()
+            .parse()
+            .ok()
+            .filter(|v: &Real| v.is_finite() && *v > 0.0)
+            .ok_or_else(|| format!("`{assignment}`: {value} is not a positive number"))?;
+        let whole = || number.min(usize::MAX as Real).ceil() as usize;
+        match key.trim() {
+            "frames" => self.frames = whole(),
+            "particles" => self.particles = whole(),
+            "fine_vertices" => self.fine_vertices = whole(),
+            "substeps" => self.substeps = whole(),
+            "memory_gb" => self.memory_gb = number,
+            "hours" => self.hours = number,
+            other => return Err(format!("`{other}` is not a limit: one of {LIMIT_KEYS}")),
+        }
+        Ok(())
+    }
+}
+
+/// What a scene is estimated to take.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Estimate {
+    pub frames: usize,
+    pub particles: usize,
+    pub substeps: usize,
+    /// Solver sweeps per substep (1 for P1's integrators).
+    pub iterations: usize,
+    pub fine_vertices: usize,
+    pub memory_gb: Real,
+    pub hours: Real,
+    pub solver: SolverName,
+}
+
+/// Why a scene is refused before it runs.
+#[derive(Debug, Error, Clone, PartialEq)]
+#[error(
+    "{what}: about {estimate}, over the limit of {limit}; {change}, or raise it with `--limit {key}=N`"
+)]
+pub struct BudgetError {
+    pub what: &'static str,
+    pub key: &'static str,
+    pub estimate: String,
+    pub limit: String,
+    pub change: String,
+}
+
+/// The estimate for `scene` with `garment` (the joined cloth), simulated at `substep` seconds,
+/// over `frames` frames.
+pub fn estimate(scene: &Scene, garment: &PolyMesh, substep: Real, frames: usize) -> Estimate {
+    let c = &scene.cloth;
+    let fx = &scene.effects;
+    let particles = garment.positions.len();
+    let per_frame = 1.0 / (scene.scene.fps * substep.max(1e-12));
+    let substeps = (per_frame - 1e-9).ceil().clamp(1.0, 1e15) as usize;
+    let iterations = match c.solver {
+        SolverName::P1 => 1,
+        SolverName::Xpbd => c.xpbd_iterations as usize,
+        SolverName::Vbd => c.vbd_iterations as usize,
+    };
+    let fine_vertices = match fx.refine {
+        0 => 0,
+        level => fine_vertex_count(garment, level),
+    };
+    let grid = |m: Option<CollisionMethod>| match m {
+        Some(CollisionMethod::Sdf) => 22.0 * (fx.sdf_resolution as Real).powi(3),
+        Some(CollisionMethod::DepthMaps) => 58.0 * 6.0 * (fx.depth_resolution as Real).powi(2),
+        _ => 0.0,
+    };
+    let fine_collider =
+        (fx.refine > 0 && fx.fine_collision).then(|| fx.fine_collider.unwrap_or(fx.body_collision));
+    let bytes = 50e6
+        + 4e3 * particles as Real
+        + 1.2e3 * fine_vertices as Real
+        + grid(Some(fx.body_collision))
+        + grid(fine_collider);
+    let frame_us =
+        particles as Real * substeps as Real * iterations as Real + 8.0 * fine_vertices as Real;
+    Estimate {
+        frames,
+        particles,
+        substeps,
+        iterations,
+        fine_vertices,
+        memory_gb: bytes / 1e9,
+        hours: frames as Real * frame_us / 1e6 / 3600.0,
+        solver: c.solver,
+    }
+}
+
+/// Fine vertices of `coarse` refined at `level` (as `pnt_surface::PnRefiner` builds them).
+pub fn fine_vertex_count(coarse: &PolyMesh, level: u8) -> usize {
+    let (tris, _) = coarse.triangulate();
+    let mut edges: Vec<(u32, u32)> = tris
+        .iter()
+        .flat_map(|t| (0..3).map(move |k| (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]))))
+        .collect();
+    edges.sort_unstable();
+    edges.dedup();
+    pnt_surface::fine_vertex_count(coarse.positions.len(), edges.len(), tris.len(), level)
+}
+
+/// `e` against `limits`: the first limit it passes, naming what to change in the scene.
+pub fn check(e: &Estimate, limits: &Limits) -> Result<(), BudgetError> {
+    let over = |what, key, estimate: String, limit: String, change: &str| {
+        Err(BudgetError {
+            what,
+            key,
+            estimate,
+            limit,
+            change: change.to_string(),
+        })
+    };
+    if e.frames > limits.frames {
+        return over(
+            "frames",
+            "frames",
+            e.frames.to_string(),
+            limits.frames.to_string(),
+            "lower scene.duration or scene.fps, or run fewer with --frames",
+        );
+    }
+    if e.particles > limits.particles {
+        return over(
+            "garment particles",
+            "particles",
+            e.particles.to_string(),
+            limits.particles.to_string(),
+            "make the garment coarser ([garment] particles, columns or row_spacing)",
+        );
+    }
+    if e.substeps > limits.substeps {
+        let change = match e.solver {
+            SolverName::P1 => {
+                "P1's stable substep shrinks as the stiffnesses (cloth.k_*) and cloth.spring_damping grow: lower them, or use cloth.solver = \"vbd\" (stable at any stiffness)"
+            }
+            SolverName::Xpbd => "raise cloth.xpbd_substep",
+            SolverName::Vbd => "raise cloth.vbd_substep",
+        };
+        return over(
+            "substeps a frame",
+            "substeps",
+            e.substeps.to_string(),
+            limits.substeps.to_string(),
+            change,
+        );
+    }
+    if e.fine_vertices > limits.fine_vertices {
+        return over(
+            "fine vertices",
+            "fine_vertices",
+            e.fine_vertices.to_string(),
+            limits.fine_vertices.to_string(),
+            "lower effects.refine",
+        );
+    }
+    if e.memory_gb > limits.memory_gb {
+        return over(
+            "peak memory",
+            "memory_gb",
+            format!("{:.1} GB", e.memory_gb),
+            format!("{} GB", limits.memory_gb),
+            "lower effects.refine, effects.sdf_resolution or effects.depth_resolution, or make the garment coarser",
+        );
+    }
+    if e.hours > limits.hours {
+        return over(
+            "run time",
+            "hours",
+            format!("{:.1} h", e.hours),
+            format!("{} h", limits.hours),
+            "shorten the run (scene.duration, --frames), lower effects.refine or the solver's iterations, or make the garment coarser",
+        );
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use tryon_core::mesh::grid_xz;
+
+    #[test]
+    fn the_fine_vertex_count_is_the_refiners() {
+        // A 3 x 2 grid of quads: 12 vertices, 12 triangles, 23 edges. At level 2 (4 segments an
+        // edge): 12 + 23 * 3 + 12 * 3 = 117.
+        let g = grid_xz(3, 2, 1.0, 1.0, 0.0);
+        assert_eq!(fine_vertex_count(&g, 2), 117);
+        for level in 1..=3 {
+            let built = pnt_surface::PnRefiner::new(&g, level).unwrap();
+            assert_eq!(
+                fine_vertex_count(&g, level),
+                built.sources.len(),
+                "level {level}"
+            );
+        }
+    }
+
+    #[test]
+    fn limits_take_known_keys_and_positive_numbers() {
+        let mut l = Limits::default();
+        l.set("hours=12").unwrap();
+        l.set(" frames = 5e5 ").unwrap();
+        assert_eq!((l.hours, l.frames), (12.0, 500_000));
+        for bad in [
+            "hours",
+            "hours=0",
+            "hours=-1",
+            "hours=nan",
+            "hours=inf",
+            "speed=2",
+        ] {
+            let e = l.set(bad).unwrap_err();
+            assert!(
+                e.contains(bad.split('=').next().unwrap_or(bad)),
+                "{bad}: {e}"
+            );
+        }
+        assert!(l.set("speed=2").unwrap_err().contains("frames, particles"));
+    }
+
+    #[test]
+    fn the_first_limit_passed_names_its_key_and_what_to_change() {
+        let fine = Estimate {
+            frames: 100,
+            particles: 1000,
+            substeps: 5,
+            iterations: 10,
+            fine_vertices: 10_000,
+            memory_gb: 0.1,
+            hours: 0.01,
+            solver: SolverName::Vbd,
+        };
+        let l = Limits::default();
+        assert!(check(&fine, &l).is_ok());
+        let cases = [
+            (
+                Estimate {
+                    frames: 300_000,
+                    ..fine
+                },
+                "--limit frames=N",
+                "scene.duration",
+            ),
+            (
+                Estimate {
+                    particles: 200_000,
+                    ..fine
+                },
+                "--limit particles=N",
+                "[garment]",
+            ),
+            (
+                Estimate {
+                    substeps: 3000,
+                    ..fine
+                },
+                "--limit substeps=N",
+                "cloth.vbd_substep",
+            ),
+            (
+                Estimate {
+                    substeps: 3000,
+                    solver: SolverName::P1,
+                    ..fine
+                },
+                "--limit substeps=N",
+                "cloth.spring_damping",
+            ),
+            (
+                Estimate {
+                    fine_vertices: 5_000_000,
+                    ..fine
+                },
+                "fine_vertices=N",
+                "effects.refine",
+            ),
+            (
+                Estimate {
+                    memory_gb: 9.0,
+                    ..fine
+                },
+                "memory_gb=N",
+                "about 9.0 GB",
+            ),
+            (Estimate { hours: 5.0, ..fine }, "hours=N", "about 5.0 h"),
+        ];
+        for (e, flag, says) in cases {
+            let text = check(&e, &l).unwrap_err().to_string();
+            assert!(text.contains(flag) && text.contains(says), "{text}");
+        }
+    }
+}
