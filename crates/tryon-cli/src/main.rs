@@ -48,7 +48,7 @@ struct RunFlags {
 struct BudgetFlags {
     /// Raise (or lower) a limit the scene's estimate is held against before it runs, e.g.
     /// `--limit hours=12` (repeatable; keys: frames, particles, fine_vertices, substeps,
-    /// memory_gb, hours).
+    /// memory_gb, hours, glb_gb).
     #[arg(long = "limit", value_name = "KEY=VALUE", value_parser = limit_arg)]
     limits: Vec<String>,
 }
@@ -362,12 +362,13 @@ fn main() -> ExitCode {
                 p.stages().join(", ")
             );
             println!(
-                "estimate: {} substeps a frame x {} sweeps, {} fine vertices; peak memory about {:.2} GB, run time about {:.1} min (rough: docs/decisions.md)",
+                "estimate: {} substeps a frame x {} sweeps, {} fine vertices; peak memory about {:.2} GB, run time about {:.1} min, scene.glb about {:.2} GB (rough: docs/decisions.md)",
                 e.substeps,
                 e.iterations,
                 e.fine_vertices,
                 e.memory_gb,
-                e.hours * 60.0
+                e.hours * 60.0,
+                e.glb_gb
             );
             Ok(())
         }),

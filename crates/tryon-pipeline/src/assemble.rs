@@ -70,8 +70,13 @@ impl Pipeline {
             .unwrap_or(scene.scene.settle + body.clip_len);
         let frames = (duration * fps).round().max(1.0) as usize;
         let substep = solver.info().nominal_substep;
-        let estimate =
-            budget::estimate(&scene, &garment, substep, options.frames.unwrap_or(frames));
+        let estimate = budget::estimate(
+            &scene,
+            &garment,
+            body.mesh.positions.len(),
+            substep,
+            options.frames.unwrap_or(frames),
+        );
         budget::check(&estimate, &options.limits)?;
         let collider = collides
             .then(|| build::collider(fx.body_collision, body.start_mesh(), thickness, &fx))
