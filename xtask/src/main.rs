@@ -1,7 +1,9 @@
 //! cargo xtask: project automation. `ci` (fmt, clippy, tests, tidy), `bench`, `drape`, `tidy`,
-//! `tradeoff`, `outputs`, `kimono-targets`.
+//! `tradeoff`, `outputs`, `kimono-targets`, `fuzz`.
 
 mod drape;
+mod fuzz;
+mod fuzz_mutate;
 mod outputs;
 mod tidy;
 
@@ -10,7 +12,8 @@ use std::process::{Command, ExitCode};
 const USAGE: &str = "usage: cargo xtask <command>
 
 commands:
-  ci                 cargo fmt --check, clippy -D warnings, all tests, tidy, tradeoff --quick
+  ci                 cargo fmt --check, clippy -D warnings, tidy, fuzz --quick, all tests,
+                     tradeoff --quick
   bench [ARGS..]     criterion benchmarks (cargo bench -p tryon-benches -- ARGS)
   drape [N..] [--integrator rk4|symplectic_euler|all] [--frames F] [--trace] [--set KEY=VALUE] [--png FILE]
                      run the drape scene (release) and print ms/frame, stretch, penetration
@@ -24,6 +27,11 @@ commands:
                      put the kimono family on the mannequins of their sizes (release, about 70 s
                      each); writes data/kimono/*.obj and targets.json, pictures under
                      target/kimono-targets/
+  fuzz [--quick | --cases N] [READER..]
+                     structure-aware mutation of the data folder's files through every reader
+                     (obj, bvh, mhskel, mhw, target, mhclo, scene with --set): 1,000,000 cases
+                     each by default, --quick 3,000; a panic or a case over 60 s fails, its input
+                     saved under target/fuzz/failures/; counts in target/fuzz/summary.md
   docs               regenerate docs/scenes.md (every scene key) from the schema
   tidy               check the architecture invariants and that docs/scenes.md is current";
 
@@ -34,6 +42,7 @@ fn main() -> ExitCode {
         Some("bench") => bench(&args[1..]),
         Some("drape") => drape::run(&args[1..]),
         Some("tidy") => tidy::run(),
+        Some("fuzz") => fuzz::run(&args[1..]),
         Some("outputs") => outputs::run(&args[1..]),
         Some("docs") => tidy::write_scene_docs(),
         Some("tradeoff") => tradeoff(&args[1..]),
@@ -103,6 +112,8 @@ fn ci() -> Result<(), String> {
         "warnings",
     ])?;
     tidy::run()?;
+    // Every reader through a few thousand mutated real files (the full run is `cargo xtask fuzz`).
+    fuzz::run(&["--quick".to_string()])?;
     // Benchmarks compile and run once each as tests (fast), so they cannot rot.
     cargo(&["test", "-p", "tryon-benches", "--benches"])?;
     let (passed, failed) = cargo_test_tally(&["test", "--workspace", "--all-targets"])?;

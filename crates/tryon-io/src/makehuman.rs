@@ -4,7 +4,7 @@
 
 use crate::read::{At, ReadError, json_error, read_text, short};
 use serde::Deserialize;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 use tryon_core::assets::{
     ClothBinding, MakeHumanAssets, MhBone, MhSkeleton, MhWeights, MorphTarget, ScaleRef,
@@ -64,37 +64,31 @@ pub fn parse_mhskel(text: &str, file: &Path) -> Result<MhSkeleton, ReadError> {
             ))
         })
     };
-    // Order parents first (a stable topological sort over the alphabetical map).
+    // Order parents first: the order of repeated passes over the alphabetical map, each placing
+    // every bone whose parent is already placed, computed in one walk up each parent chain.
     let names: Vec<&String> = s.bones.keys().collect();
-    let mut order: Vec<usize> = Vec::with_capacity(names.len());
-    let mut placed = vec![false; names.len()];
-    while order.len() < names.len() {
-        let before = order.len();
-        for (i, n) in names.iter().enumerate() {
-            if placed[i] {
-                continue;
-            }
-            let ready = match &s.bones[*n].parent {
-                None => true,
-                Some(p) => match names.iter().position(|m| *m == p) {
-                    Some(pi) => placed[pi],
-                    None => {
-                        return Err(at(n).err(format!(
-                            "bone `{n}` has parent `{p}`, which is not a bone of this skeleton"
-                        )));
-                    }
-                },
-            };
-            if ready {
-                placed[i] = true;
-                order.push(i);
-            }
-        }
-        if order.len() == before {
-            let stuck = names[placed.iter().position(|p| !p).unwrap_or(0)];
-            return Err(at(stuck).err(format!("bone `{stuck}` is part of a parent cycle")));
-        }
+    let index: HashMap<&str, usize> = names
+        .iter()
+        .enumerate()
+        .map(|(i, n)| (n.as_str(), i))
+        .collect();
+    let mut parent = Vec::with_capacity(names.len());
+    for n in &names {
+        parent.push(match &s.bones[*n].parent {
+            None => None,
+            Some(p) => Some(*index.get(p.as_str()).ok_or_else(|| {
+                at(n).err(format!(
+                    "bone `{n}` has parent `{p}`, which is not a bone of this skeleton"
+                ))
+            })?),
+        });
     }
+    let pass = passes(&parent).map_err(|stuck| {
+        let stuck = names[stuck];
+        at(stuck).err(format!("bone `{stuck}` is part of a parent cycle"))
+    })?;
+    let mut order: Vec<usize> = (0..names.len()).collect();
+    order.sort_by_key(|&i| (pass[i], i));
     let mut bones: Vec<MhBone> = Vec::with_capacity(order.len());
     for &i in &order {
         let name = names[i];
@@ -116,6 +110,38 @@ pub fn parse_mhskel(text: &str, file: &Path) -> Result<MhSkeleton, ReadError> {
         name: s.name,
         bones,
     })
+}
+
+/// The pass of repeated in-order sweeps in which each bone is placed (roots in pass 0; a bone in
+/// its parent's pass when the parent comes before it, else in the next), or a bone on a cycle.
+fn passes(parent: &[Option<usize>]) -> Result<Vec<usize>, usize> {
+    const UNKNOWN: usize = usize::MAX;
+    let mut pass = vec![UNKNOWN; parent.len()];
+    let mut chain = Vec::new();
+    for start in 0..parent.len() {
+        // Walk up to a bone whose pass is known (or a root), then fill the chain back down.
+        let mut b = start;
+        while pass[b] == UNKNOWN {
+            if chain.len() > parent.len() {
+                // Past as many steps as there are bones, the walk is going round a cycle.
+                return Err(b);
+            }
+            chain.push(b);
+            match parent[b] {
+                Some(p) => b = p,
+                None => break,
+            }
+        }
+        while let Some(c) = chain.pop() {
+            pass[c] = match parent[c] {
+                None => 0,
+                Some(p) if pass[p] == UNKNOWN => return Err(c),
+                Some(p) if p < c => pass[p],
+                Some(p) => pass[p] + 1,
+            };
+        }
+    }
+    Ok(pass)
 }
 
 #[derive(Deserialize)]
@@ -492,5 +518,71 @@ mod tests {
         )
         .unwrap_err();
         assert!(e.to_string().contains("deleted vertex count"), "{e}");
+    }
+
+    /// The passes as the loop over the bones computed them before (the oracle).
+    fn passes_by_sweeps(parent: &[Option<usize>]) -> Option<Vec<usize>> {
+        let mut pass = vec![usize::MAX; parent.len()];
+        let mut placed = 0;
+        for k in 0.. {
+            let before = placed;
+            for i in 0..parent.len() {
+                let ready = match parent[i] {
+                    None => true,
+                    Some(p) => pass[p] != usize::MAX,
+                };
+                if pass[i] == usize::MAX && ready {
+                    pass[i] = k;
+                    placed += 1;
+                }
+            }
+            if placed == parent.len() {
+                return Some(pass);
+            }
+            if placed == before {
+                return None;
+            }
+        }
+        None
+    }
+
+    #[test]
+    fn bones_are_ordered_as_repeated_sweeps_order_them_in_one_walk() {
+        let mut state = 12345u64;
+        let mut next = |n: usize| {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 33) as usize % n
+        };
+        for case in 0..500 {
+            let n = 1 + next(12);
+            let parent: Vec<Option<usize>> = (0..n)
+                .map(|_| if next(4) == 0 { None } else { Some(next(n)) })
+                .collect();
+            match (passes(&parent), passes_by_sweeps(&parent)) {
+                (Ok(a), Some(b)) => assert_eq!(a, b, "case {case}: {parent:?}"),
+                (Err(c), None) => {
+                    // The bone named is on a cycle: its parents lead back to it.
+                    let mut b = parent[c];
+                    let mut steps = 0;
+                    while b != Some(c) && steps <= n {
+                        b = b.and_then(|x| parent[x]);
+                        steps += 1;
+                    }
+                    assert_eq!(
+                        b,
+                        Some(c),
+                        "case {case}: {c} is not on a cycle in {parent:?}"
+                    );
+                }
+                (a, b) => panic!("case {case}: {a:?} vs {b:?} for {parent:?}"),
+            }
+        }
+        // A chain of 100,000 bones listed against its order: the sweeps took one pass a bone.
+        let n = 100_000;
+        let chain: Vec<Option<usize>> = (0..n).map(|i| (i + 1 < n).then_some(i + 1)).collect();
+        let pass = passes(&chain).unwrap();
+        assert_eq!((pass[n - 1], pass[0]), (0, n - 1));
     }
 }
