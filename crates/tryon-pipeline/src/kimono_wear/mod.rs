@@ -44,6 +44,10 @@ pub struct WearSettings {
     pub hold_frames: usize,
     /// The springs' stiffness drawing the held rows (N/m per vertex).
     pub hold_stiffness: Real,
+    /// A fourth row tied 7 cm under the bust (the datejime), so the fronts cross at the chest
+    /// instead of opening in a V to the cord. Off for the stored worn targets (it crumples the
+    /// back collar: their fit's largest error 4-7% becomes 11-13%, docs/decisions.md).
+    pub under_bust_tie: bool,
 }
 
 impl Default for WearSettings {
@@ -55,6 +59,7 @@ impl Default for WearSettings {
             tie_frames: 60,
             hold_frames: 180,
             hold_stiffness: 2e3,
+            under_bust_tie: false,
         }
     }
 }
@@ -225,6 +230,7 @@ pub fn wear_on(
         frames: s.tie_frames,
         hold_frames: s.hold_frames,
         stiffness: s.hold_stiffness,
+        under_bust: s.under_bust_tie,
         dt,
     };
     let mut tie_solver = solver(&[])?;

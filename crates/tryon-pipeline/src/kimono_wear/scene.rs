@@ -75,6 +75,7 @@ fn put_on(
     let fit = fit_kimono(&w, Targets::Flat)?;
     let settings = super::WearSettings {
         hold_frames: k.hold_frames,
+        under_bust_tie: k.under_bust_tie,
         ..super::WearSettings::default()
     };
     let worn = super::wear_on(

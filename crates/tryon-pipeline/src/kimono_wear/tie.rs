@@ -1,7 +1,9 @@
-//! The tie: three rows of the kimono are drawn by soft springs (the solver's anchors) onto rings
-//! around the body, as hands and a cord would: the cord's row to the cord's height above the
-//! ankle, the ohashori band's head just above it (the cloth between hangs as the fold), and the
-//! hem to the ankle. Each panel's row is laid by arc length from the back centre, so the left
+//! The tie: rows of the kimono are drawn by soft springs (the solver's anchors) onto rings
+//! around the body, as hands and cords would: the cord's row to the cord's height above the
+//! ankle, the ohashori band's head just above it (the cloth between hangs as the fold), the hem
+//! to the ankle, and, when asked, the row that lands 7 cm under the bust onto a ring there (the
+//! datejime, an under-bust tie, so the fronts cross at the chest instead of opening in a V to
+//! the waist). Each panel's row is laid by arc length from the back centre, so the left
 //! front wraps over the right. Springs, not held vertices: a held vertex led through another
 //! layer would cross it (docs/decisions.md, session 53), a spring gives way.
 
@@ -57,6 +59,8 @@ pub(super) struct TieJob<'a> {
     pub frames: usize,
     pub hold_frames: usize,
     pub stiffness: Real,
+    /// Whether the fourth row, under the bust, is tied.
+    pub under_bust: bool,
     pub dt: Real,
 }
 
@@ -132,13 +136,17 @@ fn left_side(job: &TieJob, subs: &[Vec<u32>], v: u32) -> bool {
 }
 
 /// The held vertices, their plans and each row's size.
-fn plan(job: &TieJob, frame: &CoarseFrame) -> (Vec<u32>, Vec<Plan>, [usize; 3]) {
+fn plan(job: &TieJob, frame: &CoarseFrame) -> (Vec<u32>, Vec<Plan>, [usize; 4]) {
     let lm = job.m.landmarks();
     let lv = job.levels;
     let hem = job.rest.iter().map(|v| v.y).fold(Real::INFINITY, Real::min);
     let (y_hem, subs) = (lm.ankle + 0.01, job.base.sub_mesh_vertices());
     let y_cord = y_hem + lv.outer[2];
     let zr = job.rest.iter().map(|p| p.z).sum::<Real>() / job.rest.len().max(1) as Real;
+    // The under-bust tie (datejime): the pattern's row that lands 7 cm under the bust, drawn
+    // onto a ring there, the left front over the right, so the fronts cross at the chest.
+    let y_ub = lm.bust - 0.07;
+    let ub_pattern = hem + lv.outer[3] + (y_ub - (y_cord + 0.02));
     let rows = [
         (row(job, hem + lv.outer[2]), y_cord, None, EASE),
         (
@@ -148,8 +156,17 @@ fn plan(job: &TieJob, frame: &CoarseFrame) -> (Vec<u32>, Vec<Plan>, [usize; 3]) 
             EASE + 0.012,
         ),
         (row(job, hem), y_hem, Some(lm.hip), 0.02),
+        (
+            match job.under_bust {
+                true => row(job, ub_pattern),
+                false => Vec::new(),
+            },
+            y_ub,
+            None,
+            EASE,
+        ),
     ];
-    let (mut held, mut plans, mut sizes) = (Vec::new(), Vec::<Plan>::new(), [0; 3]);
+    let (mut held, mut plans, mut sizes) = (Vec::new(), Vec::<Plan>::new(), [0; 4]);
     for (k, (verts, goal_y, level, ease)) in rows.into_iter().enumerate() {
         sizes[k] = verts.len();
         let seam = verts
@@ -202,8 +219,9 @@ fn plan(job: &TieJob, frame: &CoarseFrame) -> (Vec<u32>, Vec<Plan>, [usize; 3]) 
     (held, plans, sizes)
 }
 
-/// Ties the kimono; returns the frames stepped, each row's mean distance from its ring at the
-/// end (cord, band head, hem) and the cord's and band head's rows' vertices.
+/// Ties the kimono; returns the frames stepped, the first three rows' mean distance from their
+/// rings at the end (cord, band head, hem) and the vertices that stay tied in a scene (the cord's,
+/// the band head's and the under-bust rows').
 pub(super) fn tie(
     job: &TieJob,
     solver: &mut dyn ClothSolver,
@@ -224,7 +242,7 @@ pub(super) fn tie(
     }
     let mut lag = [0.0; 3];
     let mut at = 0;
-    for (k, n) in sizes.iter().enumerate() {
+    for (k, n) in sizes.iter().take(3).enumerate() {
         let d = held[at..at + n]
             .iter()
             .zip(&targets[at..at + n])
@@ -233,6 +251,7 @@ pub(super) fn tie(
         at += n;
     }
     let mut tied = held[..sizes[0] + sizes[1]].to_vec();
+    tied.extend_from_slice(&held[sizes[0] + sizes[1] + sizes[2]..]);
     tied.sort_unstable();
     tied.dedup();
     (total, lag, tied)

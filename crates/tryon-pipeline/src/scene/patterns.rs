@@ -140,6 +140,9 @@ pub struct KimonoSpec {
     /// Frames the cord holds the kimono on the mannequin after tying it, before the scene starts.
     #[schemars(range(max = 600))]
     pub hold_frames: usize,
+    /// Tie a row 7 cm under the bust too (the datejime), so the fronts cross at the chest; off,
+    /// they open in a V down to the cord.
+    pub under_bust_tie: bool,
 }
 
 impl Default for KimonoSpec {
@@ -149,6 +152,7 @@ impl Default for KimonoSpec {
             sleeve_length: None,
             lead: 1.0,
             hold_frames: 60,
+            under_bust_tie: true,
         }
     }
 }
