@@ -1,18 +1,10 @@
 //! Issue 24's in-range settings that never finished or exhausted memory: each is refused before
 //! the costly stages are built, naming the key to change and the limit to raise.
 
-use std::path::Path;
+use crate::tradeoff_scenes::scene;
 use tryon_pipeline::budget::Limits;
 use tryon_pipeline::build::AssembleError;
 use tryon_pipeline::{Options, Pipeline, Scene};
-
-fn scene(file: &str, sets: &[&str]) -> Scene {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../data/scenes")
-        .join(file);
-    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
-    Scene::load_with_overrides(&path, &sets).unwrap_or_else(|e| panic!("{e}"))
-}
 
 fn refused(s: Scene) -> String {
     match Pipeline::new(s) {

@@ -6,7 +6,8 @@
 use std::path::{Path, PathBuf};
 use tryon_pipeline::{Pipeline, Scene};
 
-fn scene(file: &str, sets: &[&str]) -> Scene {
+/// A scene of data/scenes with `sets` applied.
+pub(crate) fn scene(file: &str, sets: &[&str]) -> Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../data/scenes")
         .join(file);

@@ -188,86 +188,83 @@ pub fn fine_vertex_count(coarse: &PolyMesh, level: u8) -> usize {
 
 /// `e` against `limits`: the first limit it passes, naming what to change in the scene.
 pub fn check(e: &Estimate, limits: &Limits) -> Result<(), BudgetError> {
-    let over = |what, key, estimate: String, limit: String, change: &str| {
-        Err(BudgetError {
-            what,
-            key,
-            estimate,
-            limit,
-            change: change.to_string(),
-        })
+    let substeps_change = match e.solver {
+        SolverName::P1 => {
+            "P1's stable substep shrinks as the stiffnesses (cloth.k_*) and cloth.spring_damping grow: lower them, or use cloth.solver = \"vbd\" (stable at any stiffness)"
+        }
+        SolverName::Xpbd => "raise cloth.xpbd_substep",
+        SolverName::Vbd => "raise cloth.vbd_substep",
     };
-    if e.frames > limits.frames {
-        return over(
+    let count = |n: usize| n.to_string();
+    // (over, what, key, estimate, limit, what to change), in the order they are judged.
+    let rows = [
+        (
+            e.frames > limits.frames,
             "frames",
             "frames",
-            e.frames.to_string(),
-            limits.frames.to_string(),
+            count(e.frames),
+            count(limits.frames),
             "lower scene.duration or scene.fps, or run fewer with --frames",
-        );
-    }
-    if e.particles > limits.particles {
-        return over(
+        ),
+        (
+            e.particles > limits.particles,
             "garment particles",
             "particles",
-            e.particles.to_string(),
-            limits.particles.to_string(),
+            count(e.particles),
+            count(limits.particles),
             "make the garment coarser ([garment] particles, columns or row_spacing)",
-        );
-    }
-    if e.substeps > limits.substeps {
-        let change = match e.solver {
-            SolverName::P1 => {
-                "P1's stable substep shrinks as the stiffnesses (cloth.k_*) and cloth.spring_damping grow: lower them, or use cloth.solver = \"vbd\" (stable at any stiffness)"
-            }
-            SolverName::Xpbd => "raise cloth.xpbd_substep",
-            SolverName::Vbd => "raise cloth.vbd_substep",
-        };
-        return over(
+        ),
+        (
+            e.substeps > limits.substeps,
             "substeps a frame",
             "substeps",
-            e.substeps.to_string(),
-            limits.substeps.to_string(),
-            change,
-        );
-    }
-    if e.fine_vertices > limits.fine_vertices {
-        return over(
+            count(e.substeps),
+            count(limits.substeps),
+            substeps_change,
+        ),
+        (
+            e.fine_vertices > limits.fine_vertices,
             "fine vertices",
             "fine_vertices",
-            e.fine_vertices.to_string(),
-            limits.fine_vertices.to_string(),
+            count(e.fine_vertices),
+            count(limits.fine_vertices),
             "lower effects.refine",
-        );
-    }
-    if e.memory_gb > limits.memory_gb {
-        return over(
+        ),
+        (
+            e.memory_gb > limits.memory_gb,
             "peak memory",
             "memory_gb",
             format!("{:.1} GB", e.memory_gb),
             format!("{} GB", limits.memory_gb),
             "lower effects.refine, effects.sdf_resolution or effects.depth_resolution, or make the garment coarser",
-        );
-    }
-    if e.hours > limits.hours {
-        return over(
+        ),
+        (
+            e.hours > limits.hours,
             "run time",
             "hours",
             format!("{:.1} h", e.hours),
             format!("{} h", limits.hours),
             "shorten the run (scene.duration, --frames), lower effects.refine or the solver's iterations, or make the garment coarser",
-        );
-    }
-    if e.glb_gb > limits.glb_gb {
-        return over(
+        ),
+        (
+            e.glb_gb > limits.glb_gb,
             "scene.glb",
             "glb_gb",
             format!("{:.2} GB", e.glb_gb),
             format!("{} GB", limits.glb_gb),
             "export fewer frames (scene.duration, --frames), a coarser surface (effects.refine), or none (output.glb = false)",
-        );
+        ),
+    ];
+    match rows.into_iter().find(|r| r.0) {
+        Some((_, what, key, estimate, limit, change)) => Err(BudgetError {
+            what,
+            key,
+            estimate,
+            limit,
+            change: change.to_string(),
+        }),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 #[cfg(test)]
