@@ -1,7 +1,8 @@
 //! The `tryon` command line: `tryon demo`, `tryon run SCENE.toml`, `tryon check SCENE.toml`,
 //! `tryon inspect FILE`.
 //! Exit codes: 0 success, 2 bad input (the message names the file, line, key or value), 1 an
-//! internal error (an output that could not be written, a failed export).
+//! internal error (an output that could not be written, a failed export), 3 a `--strict` run whose
+//! garment left the body (its outputs written).
 
 mod report;
 
