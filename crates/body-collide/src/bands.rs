@@ -9,7 +9,7 @@ use tryon_core::mesh::PolyMesh;
 
 /// Garment vertices bound to the body: handle `first_handle + k` of the cloth holds vertex
 /// `vertices[k]` at its binding on the body's current shape.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Bands {
     pub vertices: Vec<u32>,
     pub bindings: Vec<SurfaceBinding>,

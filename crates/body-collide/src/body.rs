@@ -24,7 +24,7 @@ pub enum BodyError {
 pub const SNAP_REACH: Real = 0.05;
 
 /// A body triangle mesh, its topology, and its current shape.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct BodyMesh {
     pub triangles: Vec<[u32; 3]>,
     /// Neighbouring vertices of each vertex.
@@ -37,9 +37,12 @@ pub struct BodyMesh {
     pub face_normals: Vec<Vec3>,
     /// Vertex velocities (empty when the body is at rest).
     pub velocities: Vec<Vec3>,
-    /// The vertices hashed for [`BodyMesh::nearest_vertex`], built on first use after each shape.
+    /// The vertices hashed for [`BodyMesh::nearest_vertex`], built on first use after each shape
+    /// (a checkpoint leaves it out: it is made again from the shape).
+    #[serde(skip)]
     grid: std::sync::OnceLock<VertexGrid>,
     /// Unit vertex normals (sums of the fan's face normals), made on first use after each shape.
+    #[serde(skip)]
     vertex_normals: std::sync::OnceLock<Vec<Vec3>>,
 }
 

@@ -18,7 +18,7 @@ pub fn root_transform(root: usize, rest: &Vec3, pose: &Pose) -> (Mat3, Vec3) {
 }
 
 /// The rigid motion of the root from one frame to the next: x -> rot (x - from) + to.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RootDelta {
     pub rot: Mat3,
     pub from: Vec3,
@@ -40,7 +40,7 @@ impl RootDelta {
 }
 
 /// The root carry's state between frames.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RootCarry {
     pub root: usize,
     pub root_rest: Vec3,
@@ -67,6 +67,7 @@ impl Default for RootCarry {
 }
 
 impl Follower for BodyFollower {
+    tryon_core::whole_state!();
     fn start(&mut self, pose: &Pose, body: &BodyFrame, cloth: &[Vec3]) {
         let c = &mut self.carry;
         c.prev_root = root_transform(c.root, &c.root_rest, pose);

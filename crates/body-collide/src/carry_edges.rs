@@ -14,7 +14,7 @@
 use tryon_core::math::{Real, Vec3};
 
 /// Cloth edges whose lengths the carry keeps within a share of what they were.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CarryEdges {
     pub edges: Vec<[u32; 2]>,
     /// Largest relative change of an edge's length the carry may make.

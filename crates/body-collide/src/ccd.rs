@@ -17,7 +17,7 @@ const BARY_SLACK: Real = 1e-7;
 const BISECT: usize = 48;
 
 /// An inward crossing: when (fraction of the interval) and where in the triangle.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Crossing {
     pub t: Real,
     pub bary: [Real; 3],

@@ -19,7 +19,7 @@ use tryon_core::mesh::PolyMesh;
 use tryon_core::stages::{Collider, Probe};
 
 /// One orthographic view along an axis.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 struct View {
     /// Axis looked along (0 = x, 1 = y, 2 = z).
     axis: usize,
@@ -33,7 +33,7 @@ struct View {
 }
 
 /// Six-view depth-map collider (P4).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct DepthMapCollider {
     pub body: BodyMesh,
     /// Distance the cloth keeps from the body surface (m).
@@ -54,7 +54,7 @@ fn image_axes(axis: usize) -> (usize, usize) {
 }
 
 /// One view's answer for a point: the visible surface along the pixel's ray.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, serde::Serialize, serde::Deserialize)]
 struct Hit {
     depth: Real,
     normal: Vec3,
@@ -229,6 +229,7 @@ impl DepthMapCollider {
 }
 
 impl Collider for DepthMapCollider {
+    tryon_core::whole_state!();
     fn name(&self) -> &'static str {
         "depth_maps"
     }

@@ -44,7 +44,7 @@ const MEMO_SETS: usize = 4;
 /// on the same shape, gets the same answer without a search (the cloth solver probes its
 /// particles where the last step's fail-safe left them); any other starts its search from the
 /// face found last time.
-#[derive(Clone, Default)]
+#[derive(Clone, Default, serde::Serialize, serde::Deserialize)]
 struct Memo {
     at: Vec<Vec3>,
     shape: Vec<u64>,
@@ -62,7 +62,7 @@ impl Memo {
 }
 
 /// Exact point-mesh collider (the referee).
-#[derive(Clone)]
+#[derive(Clone, serde::Serialize, serde::Deserialize)]
 pub struct ExactCollider {
     pub body: BodyMesh,
     /// Distance the cloth keeps from the body surface (m).
@@ -89,7 +89,7 @@ impl std::fmt::Debug for ExactCollider {
 }
 
 /// Result of an exact query.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Projection {
     /// Signed distance (negative inside).
     pub distance: Real,
@@ -342,6 +342,7 @@ impl ExactCollider {
 }
 
 impl Collider for ExactCollider {
+    tryon_core::whole_state!();
     fn name(&self) -> &'static str {
         "exact"
     }

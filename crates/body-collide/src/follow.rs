@@ -8,7 +8,7 @@ use tryon_core::frames::BodyFrame;
 use tryon_core::math::{Real, Vec3};
 
 /// How far from the body points follow it.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FollowParams {
     /// Points within this distance of the body follow it fully (m).
     pub near: Real,
@@ -25,7 +25,7 @@ impl Default for FollowParams {
     }
 }
 
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 struct Attachment {
     face: u32,
     /// p = v0 + a (v1 - v0) + b (v2 - v0) + c n.
@@ -34,7 +34,7 @@ struct Attachment {
 }
 
 /// Records points relative to the body and puts them back after the body moves.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct BodyFollower {
     pub body: BodyMesh,
     pub params: FollowParams,
@@ -99,7 +99,7 @@ fn place(body: &BodyMesh, f: u32, abc: [Real; 3]) -> Vec3 {
 
 /// A point fixed to the body's surface for good (a garment's elastic band sewn in place): its
 /// nearest face and its coordinates there, recorded once.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SurfaceBinding {
     pub face: u32,
     /// p = v0 + a (v1 - v0) + b (v2 - v0) + c n.

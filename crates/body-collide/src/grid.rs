@@ -8,7 +8,7 @@
 use tryon_core::math::{Real, Vec3};
 
 /// The hashed vertices.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct VertexGrid {
     cell: Real,
     /// Bucket b holds `items[starts[b]..starts[b + 1]]`.

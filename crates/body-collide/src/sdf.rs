@@ -29,7 +29,7 @@ use tryon_core::mesh::PolyMesh;
 use tryon_core::stages::{Collider, Probe};
 
 /// Grid collider (P3).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct SdfCollider {
     pub body: BodyMesh,
     /// Distance the cloth keeps from the body surface (m).
@@ -460,6 +460,7 @@ impl SdfCollider {
 }
 
 impl Collider for SdfCollider {
+    tryon_core::whole_state!();
     fn name(&self) -> &'static str {
         "sdf"
     }

@@ -15,7 +15,7 @@ use wide::{CmpGe, f32x8};
 const LANES: usize = 8;
 
 /// One triangle, relative to its first corner, set up for distances from eight points at once.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, serde::Serialize, serde::Deserialize)]
 pub struct TriLanes {
     /// Corners b and c relative to a.
     b: [f32; 3],

@@ -40,7 +40,7 @@ fn contains(outer: &Aabb, inner: &Aabb) -> bool {
 }
 
 /// The body's last move and the hash of its triangles.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct SweptBody {
     /// The body's shape before its last move (empty until the first: a body that never moved).
     pub before: Vec<Vec3>,

@@ -48,7 +48,7 @@ pub enum MakeHumanError {
 }
 
 /// Girths (m) measured on a body with this module's own tape loops.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Girths {
     pub height: Real,
     pub bust: Real,
@@ -64,7 +64,7 @@ pub struct Girths {
 /// The gender value that leaves the base mesh as it is (0 female ..= 1 male).
 pub const NEUTRAL_GENDER: Real = 0.5;
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct MakeHumanBody {
     /// Every base vertex (body and helpers), morphed.
     pub rest: Vec<Vec3>,

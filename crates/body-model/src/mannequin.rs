@@ -58,7 +58,7 @@ const SEAM: usize = 7;
 const HOLE_HALF: usize = 5;
 
 /// A body built from measurements: mesh, skeleton and skinning weights.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Mannequin {
     pub measurements: Measurements,
     pub landmarks: Landmarks,
@@ -73,7 +73,7 @@ pub struct Mannequin {
 /// Influences being accumulated for one vertex (merged and cut to 4 at the end).
 type Infl = Vec<(usize, Real)>;
 
-#[derive(Default)]
+#[derive(Default, serde::Serialize, serde::Deserialize)]
 struct Builder {
     pos: Vec<Vec3>,
     infl: Vec<Infl>,

@@ -20,7 +20,7 @@ const REACH: Real = 0.03;
 const FACING: Real = -0.5;
 
 /// Which part each vertex belongs to, and the gap kept between parts.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Press {
     /// Part of each vertex (for example torso, each arm, each leg, head).
     pub parts: Vec<u8>,
@@ -29,7 +29,7 @@ pub struct Press {
 }
 
 /// What one pass did.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Pressed {
     /// Vertices moved.
     pub moved: usize,

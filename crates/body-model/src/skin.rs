@@ -9,7 +9,7 @@ use tryon_core::pose::{Pose, Skeleton};
 use tryon_core::stages::{BodyCorrections, BodyModel, Rig};
 
 /// Skinning weights: per vertex four (joint, weight) pairs; unused slots have weight 0; weights sum to 1.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SkinWeights {
     pub joints: Vec<[u16; 4]>,
     pub weights: Vec<[Real; 4]>,
@@ -91,7 +91,7 @@ pub fn joint_transforms(
 }
 
 /// A body deformed by linear blend skinning.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct SkinnedBody {
     pub rest_positions: Vec<Vec3>,
     pub triangles: Vec<[u32; 3]>,
@@ -170,6 +170,7 @@ impl SkinnedBody {
 }
 
 impl BodyModel for SkinnedBody {
+    tryon_core::whole_state!();
     fn pose(&mut self, pose: &Pose, out: &mut BodyFrame) {
         out.time = pose.time;
         let pressed = match &self.next {

@@ -5,7 +5,7 @@ use crate::model::ClothModel;
 use tryon_core::math::Real;
 
 /// A change to the bend spring joining particles `a` and `b`.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct BendChange {
     pub a: u32,
     pub b: u32,

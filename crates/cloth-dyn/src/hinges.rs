@@ -16,7 +16,7 @@ use tryon_core::math::{Real, Vec3};
 
 /// One stencil: four particles and their weights, already scaled by `sqrt(3 B / (A0 + A1))`, so
 /// that `y = sum_i w_i x_i` and `f_i = -w_i y`.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Hinge {
     pub v: [u32; 4],
     pub w: [Real; 4],

@@ -58,7 +58,7 @@ pub trait Integrator: Send {
 }
 
 /// The integrators this crate offers, by name.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum IntegratorKind {
     Rk4,
     SymplecticEuler,
@@ -102,7 +102,7 @@ fn resize(buf: &mut Vec<Vec3>, n: usize) {
 }
 
 /// Classical fourth-order Runge-Kutta (P1 section 3.1).
-#[derive(Debug, Default)]
+#[derive(Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct Rk4 {
     xs: Vec<Vec3>,
     vs: Vec<Vec3>,
@@ -162,7 +162,7 @@ impl Integrator for Rk4 {
 }
 
 /// Symplectic (semi-implicit) Euler: v += h a(x, v); x += h v.
-#[derive(Debug, Default)]
+#[derive(Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct SymplecticEuler {
     a: Vec<Vec3>,
 }
@@ -192,7 +192,7 @@ impl Integrator for SymplecticEuler {
 /// solved by conjugate gradients preconditioned by the mass. Prescribed particles (mass 0 in
 /// [`Derivative::masses`]) are filtered out of the solve, as Baraff and Witkin's constraint filter
 /// does. Each CG iteration costs one Jacobian product (about one force evaluation).
-#[derive(Debug)]
+#[derive(Debug, serde::Serialize, serde::Deserialize)]
 pub struct ImplicitEuler {
     /// Relative residual at which CG stops.
     pub tolerance: Real,

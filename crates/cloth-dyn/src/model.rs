@@ -13,7 +13,7 @@ use tryon_core::stages::ClothInfo;
 use tryon_core::topology::{Csr, NO_FACE, Topology, TopologyError};
 
 /// Which family a spring belongs to.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum SpringKind {
     /// On mesh edges; asymmetric stiffness (P1 eq. 1).
     Structural,
@@ -24,7 +24,7 @@ pub enum SpringKind {
 }
 
 /// Springs as structure-of-arrays.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SpringSet {
     pub i: Vec<u32>,
     pub j: Vec<u32>,
@@ -60,7 +60,7 @@ impl SpringSet {
 
 /// One spring as the force loop reads it: both ends and every constant in one 40-byte record, with
 /// the stiffnesses already divided by rest length (eq. 1 uses k / L).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PackedSpring {
     pub i: u32,
     pub j: u32,
@@ -103,7 +103,7 @@ pub enum BuildClothError {
 }
 
 /// Everything about a cloth that does not change while it moves.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct ClothModel {
     pub springs: SpringSet,
     /// Index ranges of each kind in `springs`: structural, shear, bend.

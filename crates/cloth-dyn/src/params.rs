@@ -3,7 +3,7 @@
 use tryon_core::math::{GRAVITY, Real, Vec3};
 
 /// Physical and numerical parameters of a cloth. Stiffnesses are per spring (N/m, as in P1 eq. 1).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ClothParams {
     /// Mass per unit area (kg/m^2), lumped to the vertices by area.
     pub density: Real,

@@ -13,7 +13,7 @@ pub const DENSITY: Real = 0.2;
 
 /// What a scene's cloth meets unless the scene says otherwise: gravity on, still air, friction
 /// 0.5 at body contacts, velocity damping 0.2 /s.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Environment {
     pub gravity: bool,
     /// Air drag coefficient (N s/m^3 per unit area).

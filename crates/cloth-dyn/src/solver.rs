@@ -20,9 +20,13 @@ const MAX_RETRIES_PER_FRAME: u32 = 64;
 
 /// A cloth simulation: the model, its parameters, an integrator and scratch memory. The state lives in
 /// the caller's [`CoarseFrame`].
+#[derive(serde::Serialize, serde::Deserialize)]
 pub struct ClothSim {
     pub model: ClothModel,
     pub params: ClothParams,
+    /// Left out of a checkpoint: the integrators keep nothing from one step to the next (their
+    /// buffers are scratch), so the restored solver keeps the one it was built with.
+    #[serde(skip, default = "placeholder_integrator")]
     integrator: Box<dyn Integrator>,
     /// Substep the stability bound allows (s).
     stable_substep: Real,
@@ -322,7 +326,21 @@ pub fn contact_velocity(v: Vec3, normal: Vec3, body_velocity: Vec3, mu: Real) ->
     body_velocity + vt * scale
 }
 
+/// What a decoded [`ClothSim`] holds until its built integrator is put back.
+fn placeholder_integrator() -> Box<dyn Integrator> {
+    IntegratorKind::SymplecticEuler.make()
+}
+
 impl ClothSolver for ClothSim {
+    fn save_state(&self) -> Option<Vec<u8>> {
+        Some(tryon_core::state::encode(self))
+    }
+    fn restore_state(&mut self, state: &[u8]) -> Result<(), tryon_core::state::StateError> {
+        let mut restored: ClothSim = tryon_core::state::decode(state)?;
+        std::mem::swap(&mut restored.integrator, &mut self.integrator);
+        *self = restored;
+        Ok(())
+    }
     fn info(&self) -> ClothInfo {
         let springs = self.model.springs.len();
         self.model

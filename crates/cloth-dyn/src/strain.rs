@@ -6,7 +6,7 @@ use crate::model::ClothModel;
 use tryon_core::math::{Real, Vec3};
 
 /// A one-sided plane constraint `normal . x[point] >= offset` (a body contact held during the passes).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ContactPlane {
     pub point: u32,
     pub normal: Vec3,
@@ -23,7 +23,7 @@ const UNREACHED: u32 = u32::MAX;
 /// rest length is never shorter than what the springs along it allow, so tethers never fight the
 /// spring limits; they carry a hanging cloth's weight to its support at once, where Gauss-Seidel
 /// passes would need a number of passes growing with the hanging length.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct Tethers {
     anchor: Vec<u32>,
     rest: Vec<Real>,
@@ -184,7 +184,7 @@ fn bend_pass(springs: &[LimitSpring], min_ratio: Real, x: &mut [Vec3]) {
 
 /// A spring the strain limit acts on, with its ends' shares of a correction (inverse mass over the
 /// pair's total; zero for both when neither end can move, which makes the spring a no-op).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct LimitSpring {
     pub i: u32,
     pub j: u32,

@@ -8,7 +8,7 @@ use std::ops::Range;
 use tryon_core::math::Real;
 
 /// One garment of a cloth model.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct GarmentWear {
     /// Its particles.
     pub particles: Range<u32>,

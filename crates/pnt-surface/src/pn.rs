@@ -9,7 +9,7 @@ use tryon_core::math::{Real, Vec3, unit};
 /// 3 b201 w^2 v + 3 b021 u^2 v + 3 b102 w v^2 + 3 b012 u v^2 + 6 b111 w u v`, with `w`, `u`, `v` the
 /// barycentric weights of corners 1, 2, 3. Normals: `n = n200 w^2 + n020 u^2 + n002 v^2 + n110 w u +
 /// n011 u v + n101 w v`, normalised.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PnPatch {
     /// b300, b030, b003, b210, b120, b201, b021, b102, b012, b111.
     pub b: [Vec3; 10],

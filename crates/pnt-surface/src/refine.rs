@@ -31,7 +31,7 @@ pub const MAX_FINE_VERTICES: usize = 20_000_000;
 
 /// PN-triangle refinement of a coarse mesh at a fixed level. Fine vertex `k < coarse count` is
 /// coarse vertex `k`.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct PnRefiner {
     pub level: u8,
     /// Segments per coarse edge, `2^level`.

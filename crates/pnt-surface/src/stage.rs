@@ -7,7 +7,7 @@ use tryon_core::math::{Real, Vec3, vertex_normals};
 use tryon_core::stages::{Clock, SurfaceInput, SurfaceStage};
 
 /// The PN refiner with the coarse normals' orientation.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct PnStage {
     pub refiner: PnRefiner,
     /// -1 when the garment's triangles wind inward (normals are flipped to face away from the
@@ -36,6 +36,7 @@ impl PnStage {
 }
 
 impl SurfaceStage for PnStage {
+    tryon_core::whole_state!();
     fn parts(&self) -> Vec<&'static str> {
         vec!["refine"]
     }

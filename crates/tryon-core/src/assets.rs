@@ -9,7 +9,7 @@ use std::ops::Range;
 
 /// A mesh as its file stores it: vertices in file order, faces (triangles and quads) with optional
 /// texture-coordinate faces, and named face groups.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ObjMesh {
     pub positions: Vec<Vec3>,
     pub uvs: Vec<[Real; 2]>,
@@ -54,7 +54,7 @@ impl ObjMesh {
 }
 
 /// One bone of a MakeHuman skeleton (.mhskel): head and tail are the means of base-mesh vertices.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct MhBone {
     pub name: String,
     pub parent: Option<usize>,
@@ -67,7 +67,7 @@ pub struct MhBone {
 }
 
 /// A MakeHuman skeleton; bones are ordered so that parents come before children.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct MhSkeleton {
     pub name: String,
     pub bones: Vec<MhBone>,
@@ -94,13 +94,13 @@ impl MhSkeleton {
 }
 
 /// Raw skin weights (.mhw): for each bone, (vertex, weight) pairs as the file lists them.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct MhWeights {
     pub bones: Vec<(String, Vec<(u32, Real)>)>,
 }
 
 /// A morph target (.target): offsets (m) of the listed vertices.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct MorphTarget {
     pub name: String,
     pub offsets: Vec<(u32, Vec3)>,
@@ -119,7 +119,7 @@ impl MorphTarget {
 
 /// A scale reference of a binding: the distance along one axis between two base vertices, and that
 /// distance (m) on the mesh the garment was made for.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ScaleRef {
     pub a: u32,
     pub b: u32,
@@ -128,7 +128,7 @@ pub struct ScaleRef {
 
 /// A garment or proxy binding (.mhclo / .proxy): each garment vertex is a weighted mix of three base
 /// vertices plus an offset scaled per axis by the body's size against the rest size.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ClothBinding {
     pub name: String,
     pub obj_file: String,
@@ -143,7 +143,7 @@ pub struct ClothBinding {
 }
 
 /// The assets a MakeHuman body is made of (lengths in metres, as tryon-io reads them).
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct MakeHumanAssets {
     /// base.obj (all groups, file vertex order).
     pub base: ObjMesh,
@@ -161,7 +161,7 @@ pub struct MakeHumanAssets {
 
 /// A motion clip: a skeleton, and one pose per frame at a fixed frame time. Rotations are relative
 /// to the skeleton's rest offsets (the pose with every rotation zero).
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct MotionClip {
     pub skeleton: Skeleton,
     /// End sites: (joint, offset from it) for joints without children in the file.

@@ -4,7 +4,7 @@ use crate::math::{Real, Vec3};
 
 /// The body at one instant: deformed vertex positions and velocities (same order as the body mesh the
 /// collider was built with).
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct BodyFrame {
     pub time: Real,
     pub positions: Vec<Vec3>,
@@ -13,7 +13,7 @@ pub struct BodyFrame {
 }
 
 /// One resolved contact between a point and the body.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Contact {
     /// Index of the point (cloth particle or fine vertex).
     pub point: u32,
@@ -30,7 +30,7 @@ pub struct Contact {
 }
 
 /// What happened while stepping one frame. Stepping never fails; problems are counted here.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct StepReport {
     /// Accepted substeps.
     pub substeps: u32,
@@ -66,7 +66,7 @@ impl StepReport {
 }
 
 /// The coarse cloth after a frame of dynamics.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CoarseFrame {
     pub time: Real,
     pub positions: Vec<Vec3>,
@@ -91,7 +91,7 @@ impl CoarseFrame {
 }
 
 /// Where a fine vertex comes from on the coarse mesh.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FineVertexSource {
     /// Coarse triangle (in the coarse mesh's triangulated view).
     pub face: u32,
@@ -108,7 +108,7 @@ pub struct FineVertexSource {
 /// is `b` and `(0, n)` is `c`; its fine vertex is `lattice[t * lattice_len(n) + lattice_index(n, i, j)]`.
 /// Fine vertices `0..coarse count` are the coarse vertices themselves; a vertex on a coarse edge
 /// exists once and is shared by the lattices of both triangles along that edge.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FineSurface {
     pub positions: Vec<Vec3>,
     /// Unit normals (the refiner's interpolated normals until a detail model blends them).

@@ -5,7 +5,7 @@ use crate::math::{Real, Vec3};
 
 /// A particle that follows a scripted path (piecewise linear in time), as when P4's user drags the cloth.
 /// A path with a single key is a pin.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Handle {
     pub particle: u32,
     /// (time s, position m), times ascending.
@@ -43,7 +43,7 @@ impl Handle {
 
 /// A grab still to happen (P4's user dragging the cloth): once the clock reaches the first key's
 /// time, the particle then nearest the first point is handed to the path's displacements.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Grab {
     /// Keys (time s, position m), times rising.
     pub path: Vec<(Real, Vec3)>,

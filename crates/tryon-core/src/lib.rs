@@ -11,6 +11,7 @@ pub mod mesh;
 pub mod pose;
 pub mod shapes;
 pub mod stages;
+pub mod state;
 pub mod topology;
 
 pub use frames::{BodyFrame, CoarseFrame, Contact, FineSurface, FineVertexSource, StepReport};

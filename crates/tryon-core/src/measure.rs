@@ -6,7 +6,7 @@ use crate::math::Real;
 use thiserror::Error;
 
 /// A tailor's measurements (metres). Girths are horizontal circumferences (a tape around the body).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Measurements {
     /// Standing height, floor to the top of the head.
     pub height: Real,
@@ -57,7 +57,7 @@ pub enum MeasureError {
 }
 
 /// Heights (y, metres above the floor) of the body's landmarks.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Landmarks {
     pub ankle: Real,
     pub knee: Real,

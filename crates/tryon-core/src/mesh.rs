@@ -5,7 +5,7 @@ use crate::math::{Real, Vec3, is_finite, triangle_area_normal};
 use thiserror::Error;
 
 /// A mesh face: a triangle or a quad, counter-clockwise seen from outside (the front side).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Face {
     Tri([u32; 3]),
     Quad([u32; 4]),
@@ -23,7 +23,7 @@ impl Face {
 }
 
 /// A polygon mesh: positions and faces (triangles and quads).
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PolyMesh {
     pub positions: Vec<Vec3>,
     pub faces: Vec<Face>,
@@ -207,7 +207,7 @@ impl PolyMesh {
 
 /// What [`PolyMesh::welded`] changed: how many vertices were merged into others and how many
 /// faces were dropped as slivers (no area left, or a corner repeated once merged).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct Welding {
     pub merged_vertices: usize,
     pub dropped_faces: usize,

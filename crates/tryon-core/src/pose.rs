@@ -3,7 +3,7 @@
 use crate::math::{Real, UnitQuat, Vec3};
 
 /// A joint hierarchy with rest offsets (parents come before children).
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Skeleton {
     pub names: Vec<String>,
     /// Parent of each joint; `None` for the root.
@@ -13,7 +13,7 @@ pub struct Skeleton {
 }
 
 /// A pose: root translation and each joint's rotation relative to its rest orientation.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Pose {
     pub time: Real,
     pub root_translation: Vec3,

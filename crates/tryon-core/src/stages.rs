@@ -49,10 +49,19 @@ pub trait BodyModel: Send {
     fn corrections(&self) -> Option<BodyCorrections> {
         None
     }
+    /// The state this stage carries from one frame into the next, for a checkpoint; `None`
+    /// when it cannot be checkpointed (`crate::state`).
+    fn save_state(&self) -> Option<Vec<u8>> {
+        None
+    }
+    /// Takes back a state [`save_state`](Self::save_state) gave, on a stage built the same way.
+    fn restore_state(&mut self, _state: &[u8]) -> Result<(), crate::state::StateError> {
+        Err(crate::state::StateError::Unsupported)
+    }
 }
 
 /// A body model's changes after skinning, over the poses it has made.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct BodyCorrections {
     /// Poses made.
     pub poses: usize,
@@ -97,6 +106,15 @@ pub trait Follower: Send {
     fn carry(&mut self, pose: &Pose, body: &mut BodyFrame, cloth: &mut CoarseFrame, dt: Real);
     /// Records the cloth against the body after the step.
     fn record(&mut self, cloth: &[Vec3]);
+    /// The state this stage carries from one frame into the next, for a checkpoint; `None`
+    /// when it cannot be checkpointed (`crate::state`).
+    fn save_state(&self) -> Option<Vec<u8>> {
+        None
+    }
+    /// Takes back a state [`save_state`](Self::save_state) gave, on a stage built the same way.
+    fn restore_state(&mut self, _state: &[u8]) -> Result<(), crate::state::StateError> {
+        Err(crate::state::StateError::Unsupported)
+    }
 }
 
 /// Collision between points and the body.
@@ -114,6 +132,15 @@ pub trait Collider: Send {
     fn resolve(&mut self, points: &mut [Vec3], contacts: &mut Vec<Contact>);
     /// Signed distance from `p` to the body surface (negative inside), if the collider can say.
     fn signed_distance(&self, p: &Vec3) -> Option<Real>;
+    /// The state this stage carries from one frame into the next, for a checkpoint; `None`
+    /// when it cannot be checkpointed (`crate::state`).
+    fn save_state(&self) -> Option<Vec<u8>> {
+        None
+    }
+    /// Takes back a state [`save_state`](Self::save_state) gave, on a stage built the same way.
+    fn restore_state(&mut self, _state: &[u8]) -> Result<(), crate::state::StateError> {
+        Err(crate::state::StateError::Unsupported)
+    }
     /// Probes the points listed in `which` (indices into `points`, which is the same slice on every
     /// call, as for `resolve`): one entry per listed point, in order, written to `out` (cleared
     /// first). The default works from `signed_distance` with a central-difference normal; colliders
@@ -213,7 +240,7 @@ pub trait Collider: Send {
 }
 
 /// A body vertex under a cloth triangle ([`Collider::pokes`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Poke {
     /// The cloth triangle (index into the triangles the caller gave).
     pub triangle: u32,
@@ -226,7 +253,7 @@ pub struct Poke {
 
 /// What a collider says about one point: signed distance to the body (negative inside) and the
 /// body's outward unit normal at the closest point (zero when unknown).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Probe {
     pub distance: Real,
     pub normal: Vec3,
@@ -241,7 +268,7 @@ impl Probe {
 }
 
 /// What a cloth solver is, for reports and metrics.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ClothInfo {
     /// The method's name (the integrator), as stats.json reports it.
     pub method: &'static str,
@@ -259,7 +286,7 @@ pub struct ClothInfo {
 
 /// What a solver with contact between layers of cloth did to the starting shape before its
 /// first step: layers modelled crossing or touching pulled apart.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Untangled {
     /// Crossing triangle pairs before and after.
     pub crossings_before: usize,
@@ -309,6 +336,15 @@ pub trait ClothSolver: Send {
     fn boxed_clone(&self) -> Option<Box<dyn ClothSolver>> {
         None
     }
+    /// The state this stage carries from one frame into the next, for a checkpoint; `None`
+    /// when it cannot be checkpointed (`crate::state`).
+    fn save_state(&self) -> Option<Vec<u8>> {
+        None
+    }
+    /// Takes back a state [`save_state`](Self::save_state) gave, on a stage built the same way.
+    fn restore_state(&mut self, _state: &[u8]) -> Result<(), crate::state::StateError> {
+        Err(crate::state::StateError::Unsupported)
+    }
 }
 
 /// Where a surface stage's work is timed: `work` runs once, its wall time counted under `part`.
@@ -317,7 +353,7 @@ pub trait Clock {
 }
 
 /// A clock that only runs the work.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct Untimed;
 
 impl Clock for Untimed {
@@ -346,10 +382,19 @@ pub trait SurfaceStage: Send {
     fn length_error(&self, _surface: &FineSurface) -> Option<(Real, usize)> {
         None
     }
+    /// The state this stage carries from one frame into the next, for a checkpoint; `None`
+    /// when it cannot be checkpointed (`crate::state`).
+    fn save_state(&self) -> Option<Vec<u8>> {
+        None
+    }
+    /// Takes back a state [`save_state`](Self::save_state) gave, on a stage built the same way.
+    fn restore_state(&mut self, _state: &[u8]) -> Result<(), crate::state::StateError> {
+        Err(crate::state::StateError::Unsupported)
+    }
 }
 
 /// A motion that holds the rest pose.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct StillMotion {
     pub joints: usize,
     pub duration: Real,
@@ -366,13 +411,14 @@ impl MotionSource for StillMotion {
 }
 
 /// A body that never moves: the pose is ignored.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct StaticBody {
     pub positions: Vec<Vec3>,
     pub triangles: Vec<[u32; 3]>,
 }
 
 impl BodyModel for StaticBody {
+    crate::whole_state!();
     fn pose(&mut self, pose: &Pose, out: &mut BodyFrame) {
         out.time = pose.time;
         out.positions.clone_from(&self.positions);
@@ -384,10 +430,11 @@ impl BodyModel for StaticBody {
 }
 
 /// No body: nothing collides.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct NoCollider;
 
 impl Collider for NoCollider {
+    crate::whole_state!();
     fn name(&self) -> &'static str {
         "none"
     }
@@ -399,12 +446,13 @@ impl Collider for NoCollider {
 }
 
 /// A cloth that does not move (only its clock advances).
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct FrozenCloth {
     pub rest: Vec<Vec3>,
 }
 
 impl ClothSolver for FrozenCloth {
+    crate::whole_state!();
     fn info(&self) -> ClothInfo {
         ClothInfo {
             method: "frozen",
@@ -433,7 +481,7 @@ impl ClothSolver for FrozenCloth {
 }
 
 /// Level-0 refinement: the fine surface is the coarse triangle mesh itself, with its vertex normals.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct FlatRefiner {
     pub triangles: Vec<[u32; 3]>,
     normals: Vec<Vec3>,
@@ -449,6 +497,7 @@ impl FlatRefiner {
 }
 
 impl SurfaceStage for FlatRefiner {
+    crate::whole_state!();
     fn parts(&self) -> Vec<&'static str> {
         vec!["refine"]
     }

@@ -9,7 +9,7 @@ use thiserror::Error;
 pub const NO_FACE: u32 = u32::MAX;
 
 /// Compressed rows: row `i` is `items[offsets[i]..offsets[i + 1]]`.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct Csr {
     pub offsets: Vec<u32>,
     pub items: Vec<u32>,
@@ -45,7 +45,7 @@ impl Csr {
 }
 
 /// Connectivity of a [`PolyMesh`].
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct Topology {
     /// Unique edges, each with its smaller vertex first.
     pub edges: Vec<[u32; 2]>,

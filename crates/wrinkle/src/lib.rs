@@ -41,7 +41,7 @@ use tryon_core::stages::Probe;
 use tryon_core::topology::Csr;
 
 /// Parameters of the detail stages.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct DetailParams {
     /// Run the wrinkle model (P1.4.3).
     pub wrinkles: bool,
@@ -115,7 +115,7 @@ pub enum DetailError {
 }
 
 /// Per-frame figures of the detail stages.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct DetailStats {
     /// Fine vertices probed by the fine collision this frame.
     pub probed: usize,
@@ -128,7 +128,7 @@ pub struct DetailStats {
 }
 
 /// P1 section 4's detail model over one fine lattice.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Detail {
     pub params: DetailParams,
     n: u32,

@@ -38,6 +38,29 @@ impl DetailStage {
 }
 
 impl SurfaceStage for DetailStage {
+    /// The detail model's state, then its collider's (which must be checkpointable too).
+    fn save_state(&self) -> Option<Vec<u8>> {
+        let collider = match &self.collider {
+            Some(c) => Some(c.save_state()?),
+            None => None,
+        };
+        Some(tryon_core::state::encode(&(&self.detail, collider)))
+    }
+    fn restore_state(&mut self, state: &[u8]) -> Result<(), tryon_core::state::StateError> {
+        use tryon_core::state::StateError;
+        let (detail, collider): (Detail, Option<Vec<u8>>) = tryon_core::state::decode(state)?;
+        match (&mut self.collider, collider) {
+            (Some(c), Some(bytes)) => c.restore_state(&bytes)?,
+            (None, None) => {}
+            _ => {
+                return Err(StateError::Mismatch(
+                    "fine collision on in one, off in the other".into(),
+                ));
+            }
+        }
+        self.detail = detail;
+        Ok(())
+    }
     fn parts(&self) -> Vec<&'static str> {
         let mut parts = vec![if self.detail.params.wrinkles {
             "wrinkle"

@@ -48,7 +48,7 @@ enum FanTest {
 
 /// A point found inside: the face it is judged against, its height over the surface there
 /// (negative inside), the outward normal, and where it goes to be outside.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, serde::Serialize, serde::Deserialize)]
 struct Hit {
     face: u32,
     height: Real,
@@ -73,7 +73,7 @@ enum Crease {
 
 /// The face whose plane a point is highest above, and that height. Over a convex fan no point of
 /// the fan is nearer than this.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, serde::Serialize, serde::Deserialize)]
 struct Highest(u32, Real);
 use tryon_core::mesh::PolyMesh;
 use tryon_core::stages::{Collider, Poke, Probe};
@@ -86,7 +86,7 @@ mod resolve;
 /// Per body vertex whether its fan is convex: 0 not yet known, 1 convex, 2 not. Atomic so that
 /// points probed in parallel share it: two threads judging the same fan find the same answer, so
 /// the result does not depend on which writes first.
-#[derive(Debug, Default)]
+#[derive(Debug, Default, serde::Serialize, serde::Deserialize)]
 struct ConvexCache(Vec<AtomicU8>);
 
 impl ConvexCache {
@@ -116,7 +116,7 @@ impl Clone for ConvexCache {
 }
 
 /// P1's nearest-vertex tracking collider.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct NearestVertexCollider {
     pub body: BodyMesh,
     /// Distance the cloth keeps from the body surface (m).
@@ -257,6 +257,7 @@ impl NearestVertexCollider {
 }
 
 impl Collider for NearestVertexCollider {
+    tryon_core::whole_state!();
     fn name(&self) -> &'static str {
         "nearest_vertex"
     }

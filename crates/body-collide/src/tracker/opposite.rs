@@ -31,7 +31,7 @@ const PAR_CHUNK: usize = 64;
 /// Per point, the facing vertex found (or [`NONE`]), the body move count then and where the point
 /// was: the body does not move between updates, so a point that has moved less than
 /// [`super::RECHECK`] since keeps it without a new search.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, serde::Serialize, serde::Deserialize)]
 pub(super) struct Facing {
     vertex: u32,
     moves: u32,

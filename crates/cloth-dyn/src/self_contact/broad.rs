@@ -10,7 +10,7 @@ use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy};
 use tryon_core::math::{Real, Vec3};
 
 /// Which broad phase finds candidate pairs.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum BroadPhase {
     /// A spatial hash rebuilt each step (Teschner et al. 2003).
     Hash,
@@ -20,7 +20,7 @@ pub enum BroadPhase {
 }
 
 /// A thread's scratch space for queries.
-#[derive(Debug, Default)]
+#[derive(Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct Scratch {
     /// Candidate triangles of a vertex, or candidate edges of an edge.
     pub found: Vec<u32>,
@@ -29,7 +29,7 @@ pub struct Scratch {
 }
 
 /// The broad phase's state.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct Broad {
     pub kind: BroadPhase,
     grid: Grid,

@@ -8,7 +8,7 @@ use tryon_core::math::{Real, Vec3};
 const MAX_SPAN: i64 = 16;
 
 /// A spatial hash of boxes.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct Grid {
     cell: Real,
     mask: u64,
@@ -114,7 +114,7 @@ impl Grid {
 }
 
 /// Which items a query has met, by generation: nothing to clear between queries.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct Stamps {
     stamp: Vec<u32>,
     generation: u32,

@@ -49,7 +49,7 @@ const PARALLEL: Real = 0.1;
 const CHUNK: usize = 64;
 
 /// Self-contact settings.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SelfParams {
     /// Distance the cloth keeps from itself (m).
     pub thickness: Real,
@@ -89,7 +89,7 @@ impl Default for SelfParams {
 /// primitives' nearest points (a vertex minus its triangle's point, or one edge's point minus the
 /// other's). The weights are those at detection; the energy finds them again where it is
 /// evaluated ([`Stencil::weights`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Stencil {
     pub v: [u32; 4],
     pub w: [Real; 4],
@@ -110,7 +110,7 @@ pub struct Stencil {
 type Found = (Stencil, Real);
 
 /// Self-contacts of one cloth mesh.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct SelfContacts {
     pub params: SelfParams,
     tris: Vec<[u32; 3]>,

@@ -14,7 +14,7 @@ use tryon_core::stages::{Clock, Probe, SurfaceInput, SurfaceStage};
 const PASSES: u32 = 8;
 
 /// Contact between the garments of a fine surface.
-#[derive(Debug)]
+#[derive(Debug, serde::Serialize, serde::Deserialize)]
 pub struct FineLayers {
     contacts: SelfContacts,
     /// Distance kept between garments (m).
@@ -68,6 +68,7 @@ impl FineLayers {
 }
 
 impl SurfaceStage for FineLayers {
+    tryon_core::whole_state!();
     fn parts(&self) -> Vec<&'static str> {
         vec!["fine_layers"]
     }

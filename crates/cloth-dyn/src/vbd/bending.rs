@@ -36,7 +36,7 @@ use tryon_core::math::{Real, Vec3};
 pub const SLIVER: Real = 0.2;
 
 /// One hinge: triangles (a, b, c) and (b, a, d) sharing the edge a-b, its rest angle and stiffness.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Hinge {
     pub v: [u32; 4],
     pub rest: Real,
@@ -44,7 +44,7 @@ pub struct Hinge {
 }
 
 /// The hinges of a cloth and, per vertex, the hinges it belongs to and its place in each (CSR).
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Hinges {
     pub hinges: Vec<Hinge>,
     offsets: Vec<u32>,

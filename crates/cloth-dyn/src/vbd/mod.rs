@@ -40,7 +40,7 @@ use tryon_core::math::{Mat3, Real, Vec3, is_finite};
 use tryon_core::stages::{ClothInfo, ClothSolver, Collider, Probe};
 
 /// The VBD solver's own settings.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct VbdParams {
     /// Longest step (s); a frame takes as many as it needs to keep under it.
     pub substep: Real,
@@ -105,7 +105,7 @@ impl Default for VbdParams {
 }
 
 /// One spring seen from one of its ends.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 struct Arm {
     other: u32,
     rest: Real,
@@ -114,14 +114,14 @@ struct Arm {
 
 /// A body contact held during one step: stay `thickness` outside the plane through `point`
 /// with unit normal `normal`, which moves with `velocity`.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 struct Plane {
     point: Vec3,
     normal: Vec3,
 }
 
 /// The VBD garment solver over a [`ClothModel`].
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct VbdSim {
     pub model: ClothModel,
     pub params: ClothParams,
@@ -525,6 +525,7 @@ impl VbdSim {
 }
 
 impl ClothSolver for VbdSim {
+    tryon_core::whole_state!();
     fn untangled(&self) -> Option<crate::self_contact::Untangled> {
         self.untangled
     }

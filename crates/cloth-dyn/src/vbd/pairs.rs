@@ -112,7 +112,7 @@ pub fn arms_of<'a>(offsets: &[u32], arms: &'a [Arm], i: usize) -> &'a [Arm] {
 
 /// The frame a pair is held in: the ring of vertices around it with their rest offsets from the
 /// pair's rest centre, the pair's rest offset `d0` (`x_i - x_j`) and its stiffness.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Ring {
     pub ids: Vec<u32>,
     pub rest: Vec<Vec3>,

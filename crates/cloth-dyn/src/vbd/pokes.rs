@@ -43,7 +43,7 @@ pub const POKE_DEPTH: Real = 0.01;
 pub const SAME_SIDE: Real = 0.7;
 
 /// The pokes of a frame and, per particle, the pokes it shares (CSR).
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct Pokes {
     pub list: Vec<Poke>,
     offsets: Vec<u32>,

@@ -7,7 +7,7 @@
 use tryon_core::math::{Real, Vec3};
 
 /// A distance constraint between two particles.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Edge {
     pub i: u32,
     pub j: u32,
@@ -16,7 +16,7 @@ pub struct Edge {
 
 /// A dihedral-angle constraint: triangles (a, b, c) and (b, a, d) share the edge a-b; `c` and `d`
 /// are the opposite vertices.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Hinge {
     pub v: [u32; 4],
     pub rest_angle: Real,

@@ -18,7 +18,7 @@ use wide::{CmpGt, f32x8};
 pub const LANES: usize = 8;
 
 /// Three coordinates, eight lanes each.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, serde::Serialize, serde::Deserialize)]
 struct V3 {
     x: f32x8,
     y: f32x8,
@@ -60,7 +60,7 @@ impl V3 {
 }
 
 /// Up to eight hinges of one colour, lane by lane.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct HingeBatch {
     /// `v[k][lane]`: the lane's particle k (a, b, c, d as in [`Hinge`]).
     pub v: [[u32; LANES]; 4],
@@ -69,7 +69,7 @@ pub struct HingeBatch {
 }
 
 /// Up to eight distance constraints of one colour.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct EdgeBatch {
     pub i: [u32; LANES],
     pub j: [u32; LANES],

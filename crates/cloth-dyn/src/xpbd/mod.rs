@@ -28,7 +28,7 @@ use tryon_core::math::{Real, Vec3, is_finite};
 use tryon_core::stages::{ClothInfo, ClothSolver, Collider};
 
 /// The XPBD solver's own settings.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct XpbdParams {
     /// Longest substep (s); a frame takes as many as it needs to keep under it.
     pub substep: Real,
@@ -47,7 +47,7 @@ pub struct XpbdParams {
 }
 
 /// How the XPBD solver bends the cloth.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum XpbdBending {
     /// A dihedral-angle constraint on every interior edge (compliance `bend_compliance`).
     #[default]
@@ -71,7 +71,7 @@ impl Default for XpbdParams {
 
 /// The XPBD garment solver over a [`ClothModel`] (masses, handles and topology are shared with
 /// P1's solver).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct XpbdSim {
     pub model: ClothModel,
     pub params: ClothParams,
@@ -295,6 +295,7 @@ impl XpbdSim {
 }
 
 impl ClothSolver for XpbdSim {
+    tryon_core::whole_state!();
     fn info(&self) -> ClothInfo {
         let elements = self.edges.len() + self.hinges.len() + self.bend_springs.len();
         self.model.info("xpbd", self.xpbd.substep, elements)

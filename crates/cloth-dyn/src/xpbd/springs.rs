@@ -10,7 +10,7 @@ use std::ops::Range;
 use tryon_core::math::{Real, Vec3};
 
 /// One bend spring as a constraint.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct BendSpring {
     pub i: u32,
     pub j: u32,
