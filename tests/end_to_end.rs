@@ -92,9 +92,15 @@ fn demo_runs_a_few_frames_stays_close_and_writes_outputs_that_read_back() {
 
     let dir = scratch_dir("demo");
     let files = p.export(&run, &dir).unwrap();
-    assert_eq!(files.len(), 3);
+    assert_eq!(files.len(), 4);
     let stats: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.join("stats.json")).unwrap()).unwrap();
+    // frames.jsonl: one line a judged frame, each the object stats.json lists for that frame.
+    let lines = std::fs::read_to_string(dir.join("frames.jsonl")).unwrap();
+    let lines: Vec<serde_json::Value> =
+        (lines.lines().map(|l| serde_json::from_str(l).unwrap())).collect();
+    assert_eq!(lines.len(), 10);
+    assert_eq!(&serde_json::Value::Array(lines), &stats["per_frame"]);
     assert_eq!(stats["frames"], 10);
     assert!(stats["counts"]["coarse_vertices"].as_u64().unwrap() >= 300);
     assert!(stats["counts"]["body_vertices"].as_u64().unwrap() >= 5000);
@@ -137,12 +143,12 @@ fn demo_runs_a_few_frames_stays_close_and_writes_outputs_that_read_back() {
     let mut q = Pipeline::new(Scene::demo()).unwrap();
     let (stats, files) = q.run_to(&streamed, Some(10), |_, _| {}).unwrap();
     assert_eq!(stats.metrics, run.stats.metrics);
-    assert_eq!(files.len(), 3);
-    for f in ["scene.glb", "preview.png"] {
+    assert_eq!(files.len(), 4);
+    for f in ["scene.glb", "preview.png", "frames.jsonl"] {
         let (a, b) = (std::fs::read(dir.join(f)), std::fs::read(streamed.join(f)));
         assert!(a.unwrap() == b.unwrap(), "{f} differs when streamed");
     }
-    assert_eq!(std::fs::read_dir(&streamed).unwrap().count(), 3);
+    assert_eq!(std::fs::read_dir(&streamed).unwrap().count(), 4);
     let _ = std::fs::remove_dir_all(&dir);
     let _ = std::fs::remove_dir_all(&streamed);
 }

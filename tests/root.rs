@@ -9,6 +9,7 @@ mod hard_cases;
 mod kimono;
 mod makehuman_body;
 mod real_assets;
+mod resume;
 mod retarget;
 mod shirt;
 mod tradeoff_scenes;

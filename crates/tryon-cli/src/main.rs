@@ -5,6 +5,7 @@
 //! garment left the body (its outputs written).
 
 mod report;
+mod resume;
 
 use clap::{Parser, Subcommand};
 use report::run;
@@ -40,6 +41,10 @@ struct RunFlags {
     /// after writing every output.
     #[arg(long)]
     strict: bool,
+    /// Write a checkpoint into the output folder every N frames (0: none); a killed run goes on
+    /// from the last one with `tryon run --resume DIR`.
+    #[arg(long, value_name = "N", default_value_t = 100)]
+    checkpoint_every: usize,
     #[command(flatten)]
     budget: BudgetFlags,
 }
@@ -83,13 +88,19 @@ enum Command {
         #[arg(long = "set", value_name = "TABLE.KEY=VALUE")]
         sets: Vec<String>,
     },
-    /// Run a scene file.
+    /// Run a scene file, or go on with a killed run (`--resume DIR`).
     Run {
         /// The scene file (TOML; see docs/scenes.md for every key).
-        scene: PathBuf,
+        #[arg(required_unless_present = "resume")]
+        scene: Option<PathBuf>,
         /// Output directory; default out/<scene name>.
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Go on with the run whose output folder is DIR from its last checkpoint, as it was
+        /// asked for (scene, overrides, frames, limits); the outputs end as an uninterrupted
+        /// run's would.
+        #[arg(long, value_name = "DIR", conflicts_with_all = ["scene", "out", "sets", "frames", "limits"])]
+        resume: Option<PathBuf>,
         #[command(flatten)]
         flags: RunFlags,
         /// Override a scene value, e.g. `--set effects.body_collision=sdf` (repeatable).
@@ -230,14 +241,36 @@ fn assemble(
     Ok(p)
 }
 
-/// Runs `scene` as `flags` ask; with `--strict`, a garment that left the body fails the run.
-fn run_scene(scene: Scene, file: &str, out: &Path, flags: &RunFlags) -> Result<(), Failure> {
-    let p = assemble(scene, file, flags.quiet, &flags.budget, flags.frames)?;
-    let left = run(p, out, flags.frames, flags.quiet)?;
-    if left && flags.strict {
-        return Err(Failure::LeftTheBody);
+/// Runs `scene` (from `path`, or the embedded demo when `None`, with `sets` applied) as `flags`
+/// ask; with `--strict`, a garment that left the body fails the run.
+fn run_scene(
+    scene: Scene,
+    (path, sets): (Option<&Path>, &[String]),
+    out: &Path,
+    flags: &RunFlags,
+) -> Result<(), Failure> {
+    let file = path.map_or("<embedded demo>".into(), |p| p.display().to_string());
+    let p = assemble(scene, &file, flags.quiet, &flags.budget, flags.frames)?;
+    let invocation = resume::Invocation {
+        scene: path.map(|p| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf())),
+        sets: sets.to_vec(),
+        frames: flags.frames,
+        limits: flags.budget.limits.clone(),
+        every: flags.checkpoint_every,
+    };
+    let start = report::Start::Fresh {
+        frames: flags.frames,
+        checkpoints: invocation.checkpointing(),
+    };
+    strict(run(p, out, start, flags.quiet)?, flags.strict)
+}
+
+/// With `--strict`, a run whose garment left the body fails.
+fn strict(left: bool, strict: bool) -> Result<(), Failure> {
+    match left && strict {
+        true => Err(Failure::LeftTheBody),
+        false => Ok(()),
     }
-    Ok(())
 }
 
 /// `--frames`: a whole number of frames, at least 1.
@@ -279,19 +312,26 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Demo { out, flags, sets } => {
-            demo_scene(&sets).and_then(|s| run_scene(s, "<embedded demo>", &out, &flags))
+            demo_scene(&sets).and_then(|s| run_scene(s, (None, &sets), &out, &flags))
         }
+        Command::Run {
+            resume: Some(dir),
+            flags,
+            ..
+        } => resume::resume(&dir, flags.quiet).and_then(|left| strict(left, flags.strict)),
         Command::Run {
             scene,
             out,
             flags,
             sets,
-        } => Scene::load_with_overrides(&scene, &sets)
-            .map_err(|e| Failure::BadInput(e.to_string()))
-            .and_then(|s| {
+            ..
+        } => {
+            let scene = scene.unwrap_or_default();
+            load(&scene, &sets).and_then(|s| {
                 let out = out.unwrap_or_else(|| PathBuf::from("out").join(s.folder_name()));
-                run_scene(s, &scene.display().to_string(), &out, &flags)
-            }),
+                run_scene(s, (Some(&scene), &sets), &out, &flags)
+            })
+        }
         Command::Inspect { file } => tryon_io::inspect::summarize(&file)
             .map(|text| {
                 print!("{text}");
@@ -510,10 +550,12 @@ mod tests {
             frames: None,
             quiet: true,
             strict,
+            checkpoint_every: 0,
             budget: BudgetFlags { limits: Vec::new() },
         };
-        assert!(run_scene(scene.clone(), "t.toml", &out, &flags(false)).is_ok());
-        let strict = run_scene(scene, "t.toml", &out, &flags(true));
+        let source = (Some(Path::new("t.toml")), &[][..]);
+        assert!(run_scene(scene.clone(), source, &out, &flags(false)).is_ok());
+        let strict = run_scene(scene, source, &out, &flags(true));
         let written = out.join("stats.json").exists();
         let _ = std::fs::remove_dir_all(&out);
         assert!(matches!(strict, Err(Failure::LeftTheBody)));

@@ -5,17 +5,30 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::Path;
 use tryon_pipeline::Pipeline;
+use tryon_pipeline::checkpoint::Checkpoint;
+use tryon_pipeline::resume::{Checkpointing, ResumeError};
+
+/// How a run starts: from its first frame, or from a checkpoint.
+pub(crate) enum Start {
+    Fresh {
+        frames: Option<usize>,
+        checkpoints: Checkpointing,
+    },
+    Resume {
+        checkpoint: Box<Checkpoint>,
+        every: usize,
+    },
+}
 
 /// Runs `p` into `out` with a progress bar, then prints the summary. Returns whether the
 /// garment left the body (the summary then warns).
-pub(crate) fn run(
-    mut p: Pipeline,
-    out: &Path,
-    frames: Option<usize>,
-    quiet: bool,
-) -> Result<bool, Failure> {
-    let total = frames.unwrap_or(p.frames);
+pub(crate) fn run(mut p: Pipeline, out: &Path, start: Start, quiet: bool) -> Result<bool, Failure> {
+    let (total, done) = match &start {
+        Start::Fresh { frames, .. } => (frames.unwrap_or(p.frames), 0),
+        Start::Resume { checkpoint, .. } => (checkpoint.run.stats.frames, checkpoint.frame),
+    };
     let bar = ProgressBar::new(total as u64);
+    bar.set_position(done as u64);
     if quiet || !std::io::stderr().is_terminal() {
         bar.set_draw_target(ProgressDrawTarget::hidden());
     }
@@ -27,10 +40,27 @@ pub(crate) fn run(
         .progress_chars("=> "),
     );
     bar.set_prefix(p.scene.scene.name.clone());
-    let result = p.run_to(out, frames, |k, _| bar.set_position(k as u64));
+    let progress = |k: usize, _| bar.set_position(k as u64);
+    let result = match start {
+        Start::Fresh {
+            frames,
+            checkpoints,
+        } => (p.run_checkpointed(out, frames, &checkpoints, progress))
+            .map_err(|e| Failure::Internal(e.to_string())),
+        Start::Resume { checkpoint, every } => p
+            .resume_from(out, *checkpoint, every, progress)
+            .map_err(|e| match e {
+                ResumeError::Checkpoint(e) => Failure::BadInput(e.to_string()),
+                e => Failure::Internal(e.to_string()),
+            }),
+    };
     bar.finish_and_clear();
     mark_generated(out);
-    let (stats, files) = result.map_err(|e| Failure::Internal(e.to_string()))?;
+    let written = result?;
+    if let Some(why) = &written.no_checkpoints {
+        eprintln!("warning: no checkpoints were written: {why}");
+    }
+    let (stats, files) = (written.stats, written.files);
     let left = stats.metrics.detached_share > 0.0;
     if !quiet {
         let s = &stats;

@@ -455,5 +455,8 @@ fn spool_path(path: &Path) -> PathBuf {
     path.with_file_name(format!(".{name}.{}.frames", std::process::id()))
 }
 
+mod resume;
 #[cfg(test)]
 mod tests;
+
+pub use resume::GlbState;

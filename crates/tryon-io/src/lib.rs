@@ -18,7 +18,7 @@ pub mod textured;
 pub use atomic::{write_atomic, write_atomic_with};
 pub use bvh::{guess_unit, parse_bvh, read_bvh};
 pub use data::{DATA_ENV, data_root, data_root_from};
-pub use glb::{BodyExport, FramePose, GlbError, GlbHeader, GlbWriter, SkinnedExport};
+pub use glb::{BodyExport, FramePose, GlbError, GlbHeader, GlbState, GlbWriter, SkinnedExport};
 pub use makehuman::{MhRig, load_makehuman, read_binding, read_mhskel, read_mhw, read_target};
 pub use obj::{parse_obj, read_obj};
 pub use preview::{Camera, Image, PreviewError, PreviewMesh, garment_colour, render, write_png};

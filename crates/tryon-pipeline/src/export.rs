@@ -1,9 +1,12 @@
 //! Writing a run's outputs into a directory as the run goes: scene.glb (skinned body + morph-target
-//! garment, streamed by tryon-io's `GlbWriter`), preview.png (one frame, body and garment in
-//! different colours; only that frame is kept) and stats.json (at the end).
+//! garment, streamed by tryon-io's `GlbWriter` and written atomically at the end), frames.jsonl
+//! (the referee's figures of each judged frame, one JSON object a line, streamed as frames are
+//! made), preview.png (one frame, body and garment in different colours; only that frame is
+//! kept) and stats.json (at the end). With checkpoints, the outputs' state goes into each one
+//! and a resumed run's outputs go on from it (`checkpoint`).
 
 use crate::pipeline::Pipeline;
-use crate::run::{FrameRecord, FrameSink, RunHeader, RunOutput, Stats};
+use crate::run::{FrameRecord, FrameSink, FrameStats, RunHeader, RunOutput, Stats};
 use crate::scene::OutputSection;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
@@ -45,7 +48,18 @@ pub struct Outputs {
     /// The garment each of `garment_triangles` belongs to.
     triangle_garment: Vec<u16>,
     body_triangles: Vec<[u32; 3]>,
+    /// frames.jsonl as it is streamed, and the bytes written to it.
+    per_frame: Option<(std::io::BufWriter<std::fs::File>, u64)>,
     error: Option<ExportError>,
+}
+
+/// What [`Outputs`] has taken, for a checkpoint.
+#[derive(Debug, serde::Serialize, serde::Deserialize)]
+struct OutputsState {
+    glb: Option<tryon_io::GlbState>,
+    preview: Option<(usize, FrameRecord)>,
+    frames: usize,
+    per_frame_bytes: Option<u64>,
 }
 
 impl Outputs {
@@ -64,8 +78,64 @@ impl Outputs {
             garment_triangles: Vec::new(),
             triangle_garment: Vec::new(),
             body_triangles: Vec::new(),
+            per_frame: None,
             error: None,
         })
+    }
+
+    /// The outputs of a run resumed from a checkpoint whose outputs' state is `state`: the GLB
+    /// writer and frames.jsonl go on where the checkpoint left them.
+    pub fn resume(
+        dir: &Path,
+        config: &OutputSection,
+        header: &RunHeader<'_>,
+        state: &[u8],
+    ) -> Result<Outputs, ExportError> {
+        let bad = |m: String| ExportError::Glb(GlbError::Invalid(m));
+        let st: OutputsState = tryon_core::state::decode(state).map_err(|e| bad(e.to_string()))?;
+        let mut out = Outputs::new(dir, config)?;
+        out.take_header(header);
+        out.glb = match st.glb {
+            Some(g) => Some(GlbWriter::resume(
+                &dir.join("scene.glb"),
+                &glb_header(header),
+                g,
+            )?),
+            None => None,
+        };
+        if out.config.glb != out.glb.is_some() || out.config.stats != st.per_frame_bytes.is_some() {
+            return Err(bad("the checkpoint's outputs are not the scene's".into()));
+        }
+        if let Some(len) = st.per_frame_bytes {
+            let path = dir.join("frames.jsonl");
+            let io = |source| ExportError::Json {
+                path: path.clone(),
+                source,
+            };
+            let mut f = std::fs::OpenOptions::new()
+                .write(true)
+                .open(&path)
+                .map_err(io)?;
+            if f.metadata().map_err(io)?.len() < len {
+                return Err(bad(format!(
+                    "{}: shorter than at the checkpoint",
+                    path.display()
+                )));
+            }
+            f.set_len(len).map_err(io)?;
+            std::io::Seek::seek(&mut f, std::io::SeekFrom::End(0)).map_err(io)?;
+            out.per_frame = Some((std::io::BufWriter::new(f), len));
+        }
+        out.preview = st.preview;
+        out.frames = st.frames;
+        Ok(out)
+    }
+
+    /// Keeps what the outputs need of the run's header.
+    fn take_header(&mut self, h: &RunHeader<'_>) {
+        self.garment_triangles = h.garment_triangles.to_vec();
+        self.triangle_garment = h.triangle_garment.to_vec();
+        self.body_triangles = h.body_triangles.to_vec();
     }
 
     /// Writes what is left (the GLB's layout, the preview, stats.json) and returns the files
@@ -75,6 +145,14 @@ impl Outputs {
             return Err(e);
         }
         let mut written = Vec::new();
+        if let Some((mut f, _)) = self.per_frame.take() {
+            let path = self.dir.join("frames.jsonl");
+            std::io::Write::flush(&mut f).map_err(|source| ExportError::Json {
+                path: path.clone(),
+                source,
+            })?;
+            written.push(path);
+        }
         if let Some(glb) = self.glb.take()
             && self.frames > 0
         {
@@ -127,38 +205,60 @@ impl Outputs {
 
 impl FrameSink for Outputs {
     fn begin(&mut self, h: &RunHeader<'_>) {
-        self.garment_triangles = h.garment_triangles.to_vec();
-        self.triangle_garment = h.triangle_garment.to_vec();
-        self.body_triangles = h.body_triangles.to_vec();
+        self.take_header(h);
+        if self.config.stats {
+            let path = self.dir.join("frames.jsonl");
+            match std::fs::File::create(&path) {
+                Ok(f) => self.per_frame = Some((std::io::BufWriter::new(f), 0)),
+                Err(source) => self.error = Some(ExportError::Json { path, source }),
+            }
+        }
         if !self.config.glb {
             return;
         }
-        let body = match h.rig {
-            Some(r) => BodyExport::Skinned(SkinnedExport {
-                positions: r.rest_positions,
-                triangles: h.body_triangles,
-                joint_names: &r.skeleton.names,
-                parents: &r.skeleton.parents,
-                joint_rest: r.joint_rest,
-                joints: r.joints,
-                weights: r.weights,
-            }),
-            None => BodyExport::Static {
-                positions: h.body_positions,
-                triangles: h.body_triangles,
-            },
-        };
-        let header = GlbHeader {
-            name: h.name,
-            body,
-            garment_triangles: h.garment_triangles,
-            garment_names: h.garment_names,
-            triangle_garment: h.triangle_garment,
-        };
-        match GlbWriter::create(&self.dir.join("scene.glb"), &header) {
+        match GlbWriter::create(&self.dir.join("scene.glb"), &glb_header(h)) {
             Ok(w) => self.glb = Some(w),
             Err(e) => self.error = Some(e.into()),
         }
+    }
+
+    fn frame_stats(&mut self, stats: &FrameStats) {
+        let Some((f, written)) = &mut self.per_frame else {
+            return;
+        };
+        let mut line = serde_json::to_vec(stats).unwrap_or_default();
+        line.push(b'\n');
+        match std::io::Write::write_all(f, &line) {
+            Ok(()) => *written += line.len() as u64,
+            Err(source) => {
+                let path = self.dir.join("frames.jsonl");
+                self.error.get_or_insert(ExportError::Json { path, source });
+                self.per_frame = None;
+            }
+        }
+    }
+
+    fn save_state(&mut self) -> Option<Vec<u8>> {
+        if self.error.is_some() {
+            return None;
+        }
+        let glb = match &mut self.glb {
+            Some(g) => Some(g.checkpoint()?),
+            None => None,
+        };
+        let per_frame_bytes = match &mut self.per_frame {
+            Some((f, n)) => {
+                std::io::Write::flush(f).ok()?;
+                Some(*n)
+            }
+            None => None,
+        };
+        Some(tryon_core::state::encode(&OutputsState {
+            glb,
+            preview: self.preview.clone(),
+            frames: self.frames,
+            per_frame_bytes,
+        }))
     }
 
     fn frame(&mut self, rec: &FrameRecord) {
@@ -183,6 +283,32 @@ impl FrameSink for Outputs {
 
     fn wants_skin_offsets(&self) -> bool {
         self.glb.is_some()
+    }
+}
+
+/// The GLB writer's header of a run.
+fn glb_header<'a>(h: &'a RunHeader<'a>) -> GlbHeader<'a> {
+    let body = match h.rig {
+        Some(r) => BodyExport::Skinned(SkinnedExport {
+            positions: r.rest_positions,
+            triangles: h.body_triangles,
+            joint_names: &r.skeleton.names,
+            parents: &r.skeleton.parents,
+            joint_rest: r.joint_rest,
+            joints: r.joints,
+            weights: r.weights,
+        }),
+        None => BodyExport::Static {
+            positions: h.body_positions,
+            triangles: h.body_triangles,
+        },
+    };
+    GlbHeader {
+        name: h.name,
+        body,
+        garment_triangles: h.garment_triangles,
+        garment_names: h.garment_names,
+        triangle_garment: h.triangle_garment,
     }
 }
 
@@ -230,6 +356,9 @@ impl Pipeline {
                 }
                 _ => out.frame(f),
             }
+        }
+        for f in &run.stats.per_frame {
+            out.frame_stats(f);
         }
         out.finish(self, &run.stats)
     }

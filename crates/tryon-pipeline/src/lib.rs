@@ -11,6 +11,7 @@ pub mod assemble;
 pub mod budget;
 pub mod build;
 pub mod canvas;
+pub mod checkpoint;
 pub mod crossings;
 pub mod drape;
 pub mod export;
@@ -23,8 +24,10 @@ pub mod metrics;
 mod object;
 pub mod pipeline;
 pub mod real;
+pub mod resume;
 pub mod run;
 pub mod scene;
+pub mod stats;
 pub mod timers;
 pub mod wardrobe;
 

@@ -122,7 +122,7 @@ impl std::fmt::Debug for Pipeline {
 }
 
 /// The frame loop's state between frames.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct LoopState {
     pub body_frame: BodyFrame,
     pub pose: Pose,

@@ -4,18 +4,18 @@
 
 use crate::metrics::{Baseline, penetration, stretch};
 use crate::pipeline::{LoopState, Pipeline, run_surface};
-use serde::Serialize;
-use std::collections::BTreeMap;
+use serde::{Deserialize, Serialize};
 use std::time::Instant;
 use tryon_core::frames::{BodyFrame, CoarseFrame, StepReport};
 use tryon_core::math::{Real, Vec3};
 use tryon_core::pose::Pose;
 use tryon_core::stages::SurfaceInput;
 
+pub use crate::stats::{Counts, FrameStats, Metrics, RetargetStats, Stats, UntangleStats};
 pub use crate::timers::{StageTime, Timers};
 
 /// One output frame.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FrameRecord {
     pub time: Real,
     pub garment: Vec<Vec3>,
@@ -24,162 +24,6 @@ pub struct FrameRecord {
     /// What the body adds after skinning in that pose (its press), as offsets of rest-mesh
     /// vertices (`BodyModel::skin_offsets_at`); only when the sink asks for them.
     pub skin_offsets: Vec<(u32, Vec3)>,
-}
-
-/// Counts of the scene's meshes.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
-pub struct Counts {
-    pub coarse_vertices: usize,
-    pub coarse_faces: usize,
-    pub springs: usize,
-    pub body_vertices: usize,
-    pub body_triangles: usize,
-    /// Vertices of the refined surface (when the scene refines).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub fine_vertices: Option<usize>,
-}
-
-/// Accuracy and robustness over the run, judged by the exact referee.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
-pub struct Metrics {
-    /// Deepest garment vertex inside the body over all frames (m).
-    pub max_penetration_m: Real,
-    /// The worst frame's 99th-percentile depth (m).
-    pub p99_penetration_m: Real,
-    /// Mean over frames of the share of garment vertices deeper than 1 mm.
-    pub share_over_1mm: Real,
-    /// Largest structural edge length / rest length over all frames.
-    pub max_stretch: Real,
-    /// Smallest structural edge length / rest length over all frames.
-    pub min_stretch: Real,
-    /// Largest share, over frames, of garment vertices detached from the body (torn, slid or
-    /// fallen off; `crate::hold`): 0 while the garment stays on.
-    pub detached_share: Real,
-    /// Mean over frames of the mean structural stretch.
-    pub mean_stretch: Real,
-    pub non_finite_events: u32,
-    pub substep_retries: u32,
-    pub rollbacks: u32,
-    /// Most sub-frames a frame's body motion was split into (`[scene] body_step`).
-    pub max_body_parts: u32,
-    /// Mean over frames of the length restoration error over compressed coarse edges,
-    /// |fine path length - rest| / rest (when the scene refines).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub length_error: Option<Real>,
-    /// With `[effects] body_press`: body vertices pressed out of another part per pose (mean), and
-    /// the deepest overlap of two parts found before pressing (m). The GLB's body does not carry
-    /// the press (its joints alone animate it).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub body_pressed_per_pose: Option<Real>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub body_press_deepest_m: Option<Real>,
-    /// Garment vertices moved out of the body when placing it on the rest pose.
-    pub placement_moved: usize,
-    /// Frames the referee judged (`[output] referee_every`); the figures above are over these.
-    pub judged_frames: usize,
-    /// Most pairs of output garment triangles (sharing no vertex) that cross each other in one
-    /// frame (`crossings.rs`).
-    pub cloth_intersections: usize,
-    /// Smallest gap between layers of cloth over all frames: a vertex's distance to a triangle
-    /// not around it, along that triangle's normal (m; 0.01 when no layers came nearer).
-    pub cloth_min_gap_m: Real,
-    /// Garments worn (`[[garment]]`).
-    pub garments: usize,
-    /// Garment vertices moved out over the layers beneath when dressing, and the farthest move (m).
-    pub layer_placement_moved: usize,
-    pub layer_placement_farthest_m: Real,
-    /// Vertices of real garments' separate pieces (a jacket over its skirt, a patch on shorts)
-    /// moved out over the pieces beneath when dressing, and the farthest move (m).
-    pub piece_placement_moved: usize,
-    pub piece_placement_farthest_m: Real,
-    /// With contact between layers of cloth: what pulling apart the layers that crossed or
-    /// touched in the starting shape did before the first step.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub untangle: Option<UntangleStats>,
-    /// Per `[[fold]]`, its height over the surrounding cloth at the last frame over its drawn
-    /// height (P3's open problem: how far simulation drifts from the drawn shape); null where
-    /// a fold could not be measured. Absent without folds.
-    #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub fold_retention: Vec<Option<Real>>,
-    /// The same before the simulation, as shaped (smoothing alone lowers a fold).
-    #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub fold_retention_shaped: Vec<Option<Real>>,
-}
-
-/// What untangling the starting shape did (`tryon_core::stages::Untangled`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
-pub struct UntangleStats {
-    /// Crossing triangle pairs before and after.
-    pub crossings_before: usize,
-    pub crossings_after: usize,
-    /// Pairs still nearer than nine tenths of the thickness after (left out as never apart).
-    pub near_after: usize,
-    /// Vertices moved, and the farthest move (m).
-    pub moved: usize,
-    pub farthest_m: Real,
-}
-
-/// What retargeting a captured clip onto the body changed (`mocap_retarget::clearance`): arms
-/// opened away from the body's hips and hands swung off its head.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
-pub struct RetargetStats {
-    /// Clip frames, counted per arm, in which an arm was moved.
-    pub arm_frames_moved: usize,
-    /// The largest turn of an upper arm (degrees).
-    pub max_arm_turn_deg: Real,
-}
-
-impl From<mocap_retarget::clearance::Clearance> for RetargetStats {
-    fn from(c: mocap_retarget::clearance::Clearance) -> Self {
-        RetargetStats {
-            arm_frames_moved: c.frames_opened,
-            max_arm_turn_deg: c.max_open_deg,
-        }
-    }
-}
-
-/// Per-frame figures (for plots and regressions).
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
-pub struct FrameStats {
-    pub frame: usize,
-    pub max_penetration_m: Real,
-    pub p99_penetration_m: Real,
-    pub max_stretch: Real,
-    /// Share of garment vertices detached from the body (`crate::hold`).
-    pub detached_share: Real,
-    /// Crossing pairs of garment triangles.
-    pub cloth_intersections: usize,
-    pub contacts: u32,
-    pub retries: u32,
-    /// Sub-frames the body moved in.
-    pub body_parts: u32,
-    /// Each fold's height over its drawn height (NaN where not measurable; absent without folds).
-    #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub fold_retention: Vec<Real>,
-}
-
-/// Everything stats.json holds.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
-pub struct Stats {
-    pub scene: String,
-    pub frames: usize,
-    pub fps: Real,
-    pub integrator: String,
-    pub substep_s: Real,
-    pub collider: String,
-    pub counts: Counts,
-    /// What retargeting the clip changed (absent for motions that are not captured clips).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub retarget: Option<RetargetStats>,
-    /// Only the stages that ran.
-    pub stages: BTreeMap<String, StageTime>,
-    pub metrics: Metrics,
-    /// Wall time of the whole frame loop, s.
-    pub loop_s: Real,
-    /// What was mended in the input while assembling (absent when nothing was).
-    #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub warnings: Vec<String>,
-    pub per_frame: Vec<FrameStats>,
 }
 
 /// What a run's sinks learn before the first frame: what stays the same over the run.
@@ -207,6 +51,13 @@ pub trait FrameSink {
     /// Whether records should carry the body's skin offsets (they cost a second skinning).
     fn wants_skin_offsets(&self) -> bool {
         false
+    }
+    /// The referee's figures of a judged frame, after its record.
+    fn frame_stats(&mut self, _stats: &FrameStats) {}
+    /// What the sink has taken so far, written out and described for a checkpoint; `None` when
+    /// it cannot go on from a checkpoint.
+    fn save_state(&mut self) -> Option<Vec<u8>> {
+        None
     }
 }
 
@@ -236,7 +87,51 @@ pub struct RunOutput {
 }
 
 /// One frame's coarse result waiting for its surface stages (the pipelined loop).
-type Pending = (CoarseFrame, BodyFrame, Option<Pose>, StepReport);
+pub type Pending = (CoarseFrame, BodyFrame, Option<Pose>, StepReport);
+
+/// The frame loop's state between output frames: what a checkpoint keeps beside the stages'.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct RunState {
+    pub loop_state: LoopState,
+    /// The loop's next step (1 at the start).
+    pub next: usize,
+    pub total: StepReport,
+    /// Sums over judged frames of the mean stretch, the share over 1 mm and the length error.
+    pub sums: [Real; 3],
+    /// Frames the length error was judged on.
+    pub length_frames: usize,
+    /// Kept in a self-describing form: stats.json leaves out empty fields, which a compact
+    /// binary form cannot.
+    #[serde(with = "crate::stats::self_described")]
+    pub stats: Stats,
+    /// Stage times so far (filled when the state is saved).
+    pub timers: crate::timers::SavedTimers,
+    /// With the pipelined loop: the coarse frame made ahead of the last one recorded.
+    pub pending: Option<Pending>,
+    /// Wall time of the loop before this session (s).
+    pub loop_s: Real,
+}
+
+/// What the loop needs that stays the same over a run (made again when a run resumes).
+#[derive(Debug)]
+pub struct RunContext {
+    pub frames: usize,
+    info: tryon_core::stages::ClothInfo,
+    moving: bool,
+    every: usize,
+    pub garment_triangles: Vec<[u32; 3]>,
+    pub garment_names: Vec<String>,
+    pub triangle_garment: Vec<u16>,
+    pub body_triangles: Vec<[u32; 3]>,
+    fold_triangles: Vec<[u32; 3]>,
+    start_distances: Baseline,
+    refines: bool,
+    pipelined: bool,
+}
+
+/// Called after each output frame is handed to the sink, with the frame's number: where a run
+/// writes its checkpoints.
+pub type AfterFrame<'a> = &'a mut dyn FnMut(&Pipeline, &RunState, &mut dyn FrameSink, usize);
 
 impl Pipeline {
     /// Runs `frames` output frames (the scene's count when `None`), calling `progress(done, total)`
@@ -257,13 +152,21 @@ impl Pipeline {
     pub fn run_into(
         &mut self,
         frames: Option<usize>,
-        mut progress: impl FnMut(usize, usize),
+        progress: impl FnMut(usize, usize),
         sink: &mut dyn FrameSink,
     ) -> RunSummary {
+        let (ctx, state) = self.prepare(frames);
+        self.begin_sink(&ctx, &state, sink);
+        self.run_from(ctx, state, progress, sink, &mut |_, _, _, _| {})
+    }
+
+    /// The loop's context and its state before the first frame: the pipeline started (as
+    /// [`Pipeline::start`]), the exact referee on the body, the starting distances measured.
+    pub fn prepare(&mut self, frames: Option<usize>) -> (RunContext, RunState) {
         let frames = frames.unwrap_or(self.frames);
         let info = self.solver.info();
         let moving = self.motion.is_some();
-        let mut st = self.start();
+        let st = self.start();
         if moving {
             tryon_core::stages::Collider::update(&mut self.referee, &st.body_frame);
         }
@@ -319,126 +222,212 @@ impl Pipeline {
         stats.metrics.piece_placement_moved = self.pieces.iter().map(|l| l.moved).sum();
         stats.metrics.piece_placement_farthest_m =
             self.pieces.iter().map(|l| l.farthest).fold(0.0, Real::max);
-        let mut timers = Timers::default();
-        sink.begin(&RunHeader {
+        let ctx = RunContext {
+            frames,
+            info,
+            moving,
+            every,
+            garment_triangles,
+            garment_names,
+            triangle_garment,
+            body_triangles,
+            fold_triangles,
+            start_distances,
+            refines,
+            pipelined: self.scene.scene.pipelined && refines,
+        };
+        let state = RunState {
+            loop_state: st,
+            next: 1,
+            total: StepReport::default(),
+            sums: [0.0; 3],
+            length_frames: 0,
+            stats,
+            timers: Vec::new(),
+            pending: None,
+            loop_s: 0.0,
+        };
+        (ctx, state)
+    }
+
+    /// The sink's header of the run `ctx` describes.
+    pub fn header<'a>(&'a self, ctx: &'a RunContext) -> RunHeader<'a> {
+        RunHeader {
             name: &self.scene.scene.name,
-            garment_triangles: &garment_triangles,
-            garment_names: &garment_names,
-            triangle_garment: &triangle_garment,
+            garment_triangles: &ctx.garment_triangles,
+            garment_names: &ctx.garment_names,
+            triangle_garment: &ctx.triangle_garment,
             body_positions: &self.body_mesh.positions,
-            body_triangles: &body_triangles,
-            rig: self.body.rig().filter(|_| moving),
-        });
-        let pose0 = moving.then(|| st.pose.clone());
+            body_triangles: &ctx.body_triangles,
+            rig: self.body.rig().filter(|_| ctx.moving),
+        }
+    }
+
+    /// Starts `sink` on the run: its header, then frame 0 (the garment as placed).
+    pub fn begin_sink(&self, ctx: &RunContext, state: &RunState, sink: &mut dyn FrameSink) {
+        sink.begin(&self.header(ctx));
+        let pose0 = ctx.moving.then(|| state.loop_state.pose.clone());
         sink.frame(&FrameRecord {
             time: 0.0,
             garment: self.output_garment().to_vec(),
             skin_offsets: self.skin_offsets(&*sink, pose0.as_ref()),
             pose: pose0,
         });
-        let mut total = StepReport::default();
-        let (mut stretch_sum, mut share_sum) = (0.0, 0.0);
-        let (mut length_sum, mut length_frames) = (0.0, 0usize);
+    }
+
+    /// Runs the loop from `state` to the run's last frame, handing each frame to `sink` and
+    /// then to `after`, and gathers the run's statistics.
+    pub fn run_from(
+        &mut self,
+        ctx: RunContext,
+        mut state: RunState,
+        mut progress: impl FnMut(usize, usize),
+        sink: &mut dyn FrameSink,
+        after: AfterFrame<'_>,
+    ) -> RunSummary {
+        let frames = ctx.frames;
+        let mut timers = Timers::restored(&state.timers, &self.stages());
         let loop_start = Instant::now();
         // Pipelined: frame k's coarse step runs beside frame k-1's surface stages, so the loop
         // below records frame k-1 while frame k waits in `pending`.
-        let pipelined = self.scene.scene.pipelined && refines;
-        let mut pending: Option<Pending> = None;
-        let last = if pipelined { frames + 1 } else { frames };
-        for step in 1..=last {
+        let last = if ctx.pipelined { frames + 1 } else { frames };
+        while state.next <= last {
+            let step = state.next;
+            state.next += 1;
             let t = self.frame_time(step);
-            let (report, coarse_x, body_frame, pose, k) = if pipelined {
-                let previous = pending.take();
-                pending =
-                    self.pipelined_step(&mut st, step, frames, previous.as_ref(), &mut timers);
+            let (report, coarse_x, body_frame, pose, k) = if ctx.pipelined {
+                let previous = state.pending.take();
+                let st = &mut state.loop_state;
+                state.pending =
+                    self.pipelined_step(st, step, frames, previous.as_ref(), &mut timers);
                 let Some((cf, bf, pose, r)) = previous else {
                     continue;
                 };
                 (r, cf.positions, bf, pose, step - 1)
             } else {
                 // On a worker of rayon's pool, as the cloth step is (`advance_coarse`).
-                let r = rayon::scope(|_| self.advance(&mut st, t, &mut timers));
+                let st = &mut state.loop_state;
+                let r = rayon::scope(|_| self.advance(st, t, &mut timers));
                 (
                     r,
                     self.cloth.positions.clone(),
                     st.body_frame.clone(),
-                    moving.then(|| st.pose.clone()),
+                    ctx.moving.then(|| st.pose.clone()),
                     step,
                 )
             };
-            let t = self.frame_time(k);
-            total.accumulate(&report);
-            let output = if refines {
+            state.total.accumulate(&report);
+            if ctx.every > 0 && k % ctx.every == 0 {
+                self.judge(
+                    &ctx,
+                    &mut state,
+                    (k, &report, &coarse_x, &body_frame),
+                    &mut timers,
+                );
+            }
+            let output = if ctx.refines {
                 &self.surface.positions
             } else {
                 &coarse_x
             };
-            if every > 0 && k % every == 0 {
-                stats.metrics.judged_frames += 1;
-                if let Some((e, n)) = timers.time("referee", || {
-                    self.surface_stages
-                        .iter()
-                        .find_map(|s| s.length_error(&self.surface))
-                }) && n > 0
-                {
-                    length_sum += e;
-                    length_frames += 1;
-                }
-                let referee = &mut self.referee;
-                let (pen, (smin, smax, smean), cloth) = timers.time("referee", || {
-                    if moving {
-                        tryon_core::stages::Collider::update(referee, &body_frame);
-                    }
-                    (
-                        penetration(referee, output, &start_distances),
-                        stretch(&info.edges, &info.rest, &coarse_x),
-                        crate::crossings::judge(output, &garment_triangles),
-                    )
-                });
-                let m = &mut stats.metrics;
-                m.max_penetration_m = m.max_penetration_m.max(pen.max);
-                m.p99_penetration_m = m.p99_penetration_m.max(pen.p99);
-                m.max_stretch = m.max_stretch.max(smax);
-                m.min_stretch = if m.judged_frames == 1 {
-                    smin
-                } else {
-                    m.min_stretch.min(smin)
-                };
-                m.detached_share = m.detached_share.max(pen.detached_share);
-                m.cloth_intersections = m.cloth_intersections.max(cloth.crossings);
-                m.cloth_min_gap_m = if m.judged_frames == 1 {
-                    cloth.min_gap
-                } else {
-                    m.cloth_min_gap_m.min(cloth.min_gap)
-                };
-                stretch_sum += smean;
-                share_sum += pen.share_over_1mm;
-                stats.per_frame.push(FrameStats {
-                    frame: k,
-                    max_penetration_m: pen.max,
-                    p99_penetration_m: pen.p99,
-                    max_stretch: smax,
-                    detached_share: pen.detached_share,
-                    cloth_intersections: cloth.crossings,
-                    contacts: report.contacts,
-                    retries: report.retries,
-                    body_parts: report.body_parts,
-                    fold_retention: (self.folds).retention(&self.cloth.positions, &fold_triangles),
-                });
-            }
             sink.frame(&FrameRecord {
-                time: t,
+                time: self.frame_time(k),
                 garment: output.clone(),
                 skin_offsets: self.skin_offsets(&*sink, pose.as_ref()),
                 pose,
             });
+            if let Some(f) = state.stats.per_frame.last().filter(|f| f.frame == k) {
+                sink.frame_stats(f);
+            }
             timers.end_frame();
+            if k < frames {
+                state.timers = timers.saved();
+                let elapsed = state.loop_s;
+                state.loop_s += loop_start.elapsed().as_secs_f64();
+                after(self, &state, sink, k);
+                state.loop_s = elapsed;
+            }
             progress(k, frames);
         }
-        stats.loop_s = loop_start.elapsed().as_secs_f64();
+        state.loop_s += loop_start.elapsed().as_secs_f64();
+        self.conclude(&ctx, state, timers)
+    }
+
+    /// Judges output frame `k` with the exact referee into `state`'s statistics.
+    fn judge(
+        &mut self,
+        ctx: &RunContext,
+        state: &mut RunState,
+        (k, report, coarse_x, body_frame): (usize, &StepReport, &[Vec3], &BodyFrame),
+        timers: &mut Timers,
+    ) {
+        let stats = &mut state.stats;
+        stats.metrics.judged_frames += 1;
+        if let Some((e, n)) = timers.time("referee", || {
+            self.surface_stages
+                .iter()
+                .find_map(|s| s.length_error(&self.surface))
+        }) && n > 0
+        {
+            state.sums[2] += e;
+            state.length_frames += 1;
+        }
+        let output = if ctx.refines {
+            &self.surface.positions
+        } else {
+            coarse_x
+        };
+        let referee = &mut self.referee;
+        let (pen, (smin, smax, smean), cloth) = timers.time("referee", || {
+            if ctx.moving {
+                tryon_core::stages::Collider::update(referee, body_frame);
+            }
+            (
+                penetration(referee, output, &ctx.start_distances),
+                stretch(&ctx.info.edges, &ctx.info.rest, coarse_x),
+                crate::crossings::judge(output, &ctx.garment_triangles),
+            )
+        });
+        let m = &mut stats.metrics;
+        m.max_penetration_m = m.max_penetration_m.max(pen.max);
+        m.p99_penetration_m = m.p99_penetration_m.max(pen.p99);
+        m.max_stretch = m.max_stretch.max(smax);
+        m.min_stretch = if m.judged_frames == 1 {
+            smin
+        } else {
+            m.min_stretch.min(smin)
+        };
+        m.detached_share = m.detached_share.max(pen.detached_share);
+        m.cloth_intersections = m.cloth_intersections.max(cloth.crossings);
+        m.cloth_min_gap_m = if m.judged_frames == 1 {
+            cloth.min_gap
+        } else {
+            m.cloth_min_gap_m.min(cloth.min_gap)
+        };
+        state.sums[0] += smean;
+        state.sums[1] += pen.share_over_1mm;
+        stats.per_frame.push(FrameStats {
+            frame: k,
+            max_penetration_m: pen.max,
+            p99_penetration_m: pen.p99,
+            max_stretch: smax,
+            detached_share: pen.detached_share,
+            cloth_intersections: cloth.crossings,
+            contacts: report.contacts,
+            retries: report.retries,
+            body_parts: report.body_parts,
+            fold_retention: (self.folds).retention(&self.cloth.positions, &ctx.fold_triangles),
+        });
+    }
+
+    /// The run's statistics once the last frame is made.
+    fn conclude(&mut self, ctx: &RunContext, state: RunState, timers: Timers) -> RunSummary {
+        let mut stats = state.stats;
+        stats.loop_s = state.loop_s;
         let judged = stats.metrics.judged_frames.max(1) as Real;
-        stats.metrics.mean_stretch = stretch_sum / judged;
-        stats.metrics.share_over_1mm = share_sum / judged;
+        stats.metrics.mean_stretch = state.sums[0] / judged;
+        stats.metrics.share_over_1mm = state.sums[1] / judged;
+        let total = state.total;
         stats.metrics.non_finite_events = total.non_finite_events;
         stats.metrics.substep_retries = total.retries;
         stats.metrics.rollbacks = total.rollbacks;
@@ -447,8 +436,8 @@ impl Pipeline {
             stats.metrics.body_pressed_per_pose = Some(c.moved as Real / c.poses.max(1) as Real);
             stats.metrics.body_press_deepest_m = Some(c.deepest);
         }
-        if refines {
-            stats.metrics.length_error = Some(length_sum / length_frames.max(1) as Real);
+        if ctx.refines {
+            stats.metrics.length_error = Some(state.sums[2] / state.length_frames.max(1) as Real);
         }
         stats.metrics.untangle = self.solver.untangled().map(|u| UntangleStats {
             crossings_before: u.crossings_before,
@@ -473,8 +462,8 @@ impl Pipeline {
         }
         stats.stages = timers.finish();
         RunSummary {
-            garment_triangles,
-            body_triangles,
+            garment_triangles: ctx.garment_triangles.clone(),
+            body_triangles: ctx.body_triangles.clone(),
             stats,
         }
     }

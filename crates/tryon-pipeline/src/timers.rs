@@ -1,13 +1,13 @@
 //! Wall time per stage and per frame, as stats.json reports it (mean and max over frames).
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::time::Instant;
 use tryon_core::math::Real;
 use tryon_core::stages::Clock;
 
 /// Time spent in one stage per frame (ms).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct StageTime {
     pub ms_mean: Real,
     pub ms_max: Real,
@@ -61,6 +61,32 @@ impl Timers {
                 (name.to_string(), t)
             })
             .collect()
+    }
+}
+
+/// Timers as a checkpoint keeps them: per stage, its name, summed and largest time (ms) and
+/// frames counted.
+pub type SavedTimers = Vec<(String, Real, Real, usize)>;
+
+impl Timers {
+    /// The closed frames' totals, for a checkpoint (taken between frames).
+    pub fn saved(&self) -> SavedTimers {
+        (self.totals.iter())
+            .map(|(name, t)| (name.to_string(), t.sum, t.ms_max, t.count))
+            .collect()
+    }
+
+    /// Timers that go on from `saved`, the stages named as in `names` (a name not there is
+    /// dropped: only its time is lost).
+    pub fn restored(saved: &SavedTimers, names: &[&'static str]) -> Timers {
+        let mut t = Timers::default();
+        for (name, sum, max, count) in saved {
+            if let Some(&n) = names.iter().find(|n| **n == name.as_str()) {
+                let e = t.totals.entry(n).or_default();
+                (e.sum, e.ms_max, e.count) = (*sum, *max, *count);
+            }
+        }
+        t
     }
 }
 
