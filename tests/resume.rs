@@ -32,6 +32,10 @@ fn scratch(tag: &str) -> PathBuf {
     d
 }
 
+fn scene_has(dir: &Path, file: &str) -> bool {
+    dir.join(file).exists()
+}
+
 /// stats.json without what depends on the wall clock.
 fn stats_without_times(dir: &Path) -> serde_json::Value {
     let text = std::fs::read_to_string(dir.join("stats.json")).unwrap();
@@ -81,7 +85,16 @@ fn resumes_to_the_same_bytes(tag: &str, scene: Scene, frames: usize, every: usiz
     let r = p.resume_from(&cut, ck, every, |_, _| {});
     let r = r.unwrap_or_else(|e| panic!("{tag}: {e}"));
     assert_eq!(r.no_checkpoints, None);
-    for f in ["scene.glb", "preview.png", "frames.jsonl"] {
+    let mut files = vec![
+        "scene.glb".to_string(),
+        "preview.png".into(),
+        "frames.jsonl".into(),
+    ];
+    if scene_has(&whole, "garment.pc2") {
+        files.push("garment.pc2".into());
+        files.extend((0..=frames).map(|k| format!("garment-obj/garment_{k:05}.obj")));
+    }
+    for f in &files {
         let (a, b) = (std::fs::read(whole.join(f)), std::fs::read(cut.join(f)));
         let (a, b) = (a.unwrap(), b.unwrap_or_else(|e| panic!("{tag}: {f}: {e}")));
         assert!(
@@ -117,7 +130,9 @@ fn resumes_to_the_same_bytes(tag: &str, scene: Scene, frames: usize, every: usiz
 #[test]
 fn the_demo_resumes_to_the_same_bytes() {
     // VBD, nearest-vertex collider, follower, PN refinement with fine collision.
-    resumes_to_the_same_bytes("demo", demo(&[]), 14, 4, 10);
+    // With the caches for animation tools too.
+    let s = demo(&["output.pc2=true", "output.obj_sequence=true"]);
+    resumes_to_the_same_bytes("demo", s, 14, 4, 10);
 }
 
 #[test]

@@ -2,6 +2,7 @@
 //! foundation (a jumping body, a cloth that starts inside the body, bad meshes), determinism.
 
 mod budgets;
+mod caches;
 mod cloth_cloth;
 mod end_to_end;
 mod folds;

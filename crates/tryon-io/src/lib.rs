@@ -5,6 +5,7 @@
 
 pub mod atomic;
 pub mod bvh;
+pub mod cache;
 pub mod data;
 pub mod glb;
 mod glb_layout;
@@ -17,6 +18,7 @@ pub mod textured;
 
 pub use atomic::{write_atomic, write_atomic_with};
 pub use bvh::{guess_unit, parse_bvh, read_bvh};
+pub use cache::{CacheError, Pc2State, Pc2Writer, read_pc2, write_obj_frame};
 pub use data::{DATA_ENV, data_root, data_root_from};
 pub use glb::{BodyExport, FramePose, GlbError, GlbHeader, GlbState, GlbWriter, SkinnedExport};
 pub use makehuman::{MhRig, load_makehuman, read_binding, read_mhskel, read_mhw, read_target};

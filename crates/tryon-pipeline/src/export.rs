@@ -11,8 +11,8 @@ use crate::scene::OutputSection;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 use tryon_io::{
-    BodyExport, Camera, FramePose, GlbError, GlbHeader, GlbWriter, PreviewError, PreviewMesh,
-    SkinnedExport, garment_colour, render, write_json, write_png,
+    BodyExport, Camera, FramePose, GlbError, GlbHeader, GlbWriter, Pc2Writer, PreviewError,
+    PreviewMesh, SkinnedExport, garment_colour, render, write_json, write_obj_frame, write_png,
 };
 
 /// Why an output could not be written.
@@ -28,6 +28,8 @@ pub enum ExportError {
     Glb(#[from] GlbError),
     #[error(transparent)]
     Preview(#[from] PreviewError),
+    #[error(transparent)]
+    Cache(#[from] tryon_io::CacheError),
     #[error("{}: cannot write: {source}", path.display())]
     Json {
         path: PathBuf,
@@ -45,11 +47,14 @@ pub struct Outputs {
     preview: Option<(usize, FrameRecord)>,
     frames: usize,
     garment_triangles: Vec<[u32; 3]>,
-    /// The garment each of `garment_triangles` belongs to.
+    /// The garment each of `garment_triangles` belongs to, and the garments' names.
     triangle_garment: Vec<u16>,
+    garment_names: Vec<String>,
     body_triangles: Vec<[u32; 3]>,
     /// frames.jsonl as it is streamed, and the bytes written to it.
     per_frame: Option<(std::io::BufWriter<std::fs::File>, u64)>,
+    /// garment.pc2 (made at the first frame, when the garment's vertex count is known).
+    pc2: Option<Pc2Writer>,
     error: Option<ExportError>,
 }
 
@@ -60,6 +65,7 @@ struct OutputsState {
     preview: Option<(usize, FrameRecord)>,
     frames: usize,
     per_frame_bytes: Option<u64>,
+    pc2: Option<tryon_io::Pc2State>,
 }
 
 impl Outputs {
@@ -77,8 +83,10 @@ impl Outputs {
             frames: 0,
             garment_triangles: Vec::new(),
             triangle_garment: Vec::new(),
+            garment_names: Vec::new(),
             body_triangles: Vec::new(),
             per_frame: None,
+            pc2: None,
             error: None,
         })
     }
@@ -126,6 +134,12 @@ impl Outputs {
             std::io::Seek::seek(&mut f, std::io::SeekFrom::End(0)).map_err(io)?;
             out.per_frame = Some((std::io::BufWriter::new(f), len));
         }
+        if out.config.pc2 != st.pc2.is_some() {
+            return Err(bad("the checkpoint's outputs are not the scene's".into()));
+        }
+        if let Some(pc2) = &st.pc2 {
+            out.pc2 = Some(Pc2Writer::resume(&dir.join(PC2), pc2)?);
+        }
         out.preview = st.preview;
         out.frames = st.frames;
         Ok(out)
@@ -135,6 +149,7 @@ impl Outputs {
     fn take_header(&mut self, h: &RunHeader<'_>) {
         self.garment_triangles = h.garment_triangles.to_vec();
         self.triangle_garment = h.triangle_garment.to_vec();
+        self.garment_names = h.garment_names.to_vec();
         self.body_triangles = h.body_triangles.to_vec();
     }
 
@@ -152,6 +167,13 @@ impl Outputs {
                 source,
             })?;
             written.push(path);
+        }
+        if let Some(pc2) = self.pc2.take() {
+            pc2.finish()?;
+            written.push(self.dir.join(PC2));
+        }
+        if self.config.obj_sequence && self.frames > 0 {
+            written.push(self.dir.join(OBJ_DIR));
         }
         if let Some(glb) = self.glb.take()
             && self.frames > 0
@@ -190,7 +212,39 @@ impl Outputs {
     }
 }
 
+/// The PC2 cache's file and the OBJ sequence's folder in the output folder.
+const PC2: &str = "garment.pc2";
+const OBJ_DIR: &str = "garment-obj";
+
 impl Outputs {
+    /// Writes frame `rec` to the caches the scene asks for (PC2, the OBJ sequence).
+    fn cache_frame(&mut self, rec: &FrameRecord) {
+        if self.error.is_some() {
+            return;
+        }
+        let mut written = Ok(());
+        if self.config.pc2 {
+            if self.pc2.is_none() {
+                match Pc2Writer::create(&self.dir.join(PC2), rec.garment.len()) {
+                    Ok(w) => self.pc2 = Some(w),
+                    Err(e) => written = Err(e),
+                }
+            }
+            if let Some(w) = &mut self.pc2 {
+                written = written.and_then(|()| w.frame(&rec.garment));
+            }
+        }
+        if self.config.obj_sequence && written.is_ok() {
+            let path = (self.dir.join(OBJ_DIR)).join(format!("garment_{:05}.obj", self.frames));
+            let names = self.garment_names.as_slice();
+            let groups = (names, self.triangle_garment.as_slice());
+            written = write_obj_frame(&path, &rec.garment, &self.garment_triangles, groups);
+        }
+        if let Err(e) = written {
+            self.error = Some(e.into());
+        }
+    }
+
     /// The garment triangles of each garment, in order (all in one when not told apart).
     fn garments(&self) -> Vec<Vec<[u32; 3]>> {
         let n = self.triangle_garment.iter().map(|&g| g as usize + 1).max();
@@ -206,6 +260,12 @@ impl Outputs {
 impl FrameSink for Outputs {
     fn begin(&mut self, h: &RunHeader<'_>) {
         self.take_header(h);
+        if self.config.obj_sequence {
+            let path = self.dir.join(OBJ_DIR);
+            if let Err(source) = std::fs::create_dir_all(&path) {
+                self.error = Some(ExportError::Dir { path, source });
+            }
+        }
         if self.config.stats {
             let path = self.dir.join("frames.jsonl");
             match std::fs::File::create(&path) {
@@ -246,6 +306,10 @@ impl FrameSink for Outputs {
             Some(g) => Some(g.checkpoint()?),
             None => None,
         };
+        let pc2 = match &mut self.pc2 {
+            Some(w) => Some(w.checkpoint().ok()?),
+            None => None,
+        };
         let per_frame_bytes = match &mut self.per_frame {
             Some((f, n)) => {
                 std::io::Write::flush(f).ok()?;
@@ -258,6 +322,7 @@ impl FrameSink for Outputs {
             preview: self.preview.clone(),
             frames: self.frames,
             per_frame_bytes,
+            pc2,
         }))
     }
 
@@ -270,6 +335,7 @@ impl FrameSink for Outputs {
             });
             glb.frame(rec.time, &rec.garment, pose);
         }
+        self.cache_frame(rec);
         if self.config.preview {
             let k = self.frames;
             let reached = matches!((&self.preview, self.config.preview_frame),

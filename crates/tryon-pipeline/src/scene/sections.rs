@@ -358,6 +358,12 @@ pub struct OutputSection {
     /// referee is measurement, not product: on the demo it is most of the wall time.
     #[schemars(range(max = 100000))]
     pub referee_every: usize,
+    /// garment.pc2: the garment's frames as a PC2 point cache (Blender's Mesh Cache modifier,
+    /// 3ds Max, Maya), to play on garment-obj/garment_00000.obj or the GLB's garment.
+    pub pc2: bool,
+    /// garment-obj/garment_NNNNN.obj: the garment as one OBJ a frame (an OBJ sequence), each
+    /// garment its own group.
+    pub obj_sequence: bool,
 }
 
 impl Default for OutputSection {
@@ -370,6 +376,8 @@ impl Default for OutputSection {
             preview_width: 800,
             preview_height: 1000,
             referee_every: 1,
+            pc2: false,
+            obj_sequence: false,
         }
     }
 }

@@ -1,0 +1,50 @@
+//! Caches for animation tools (issue 25, item 4): the garment's frames as a PC2 point cache and
+//! as an OBJ sequence, read back and compared with the frames the run made.
+
+use std::path::Path;
+use tryon_pipeline::{Pipeline, Scene};
+
+#[test]
+fn pc2_and_obj_sequence_read_back_as_the_runs_frames() {
+    let sets: Vec<String> = ["output.pc2=true", "output.obj_sequence=true"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    let scene =
+        Scene::parse_with_overrides(tryon_pipeline::DEMO_SCENE, Path::new("demo.toml"), &sets)
+            .unwrap();
+    let frames = 5;
+    let mut kept = Pipeline::new(scene.clone()).unwrap();
+    let run = kept.run(Some(frames), |_, _| {});
+    let dir = std::env::temp_dir().join(format!("tryon-caches-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut p = Pipeline::new(scene).unwrap();
+    let (_, files) = p.run_to(&dir, Some(frames), |_, _| {}).unwrap();
+    assert!(files.contains(&dir.join("garment.pc2")), "{files:?}");
+    assert!(files.contains(&dir.join("garment-obj")), "{files:?}");
+
+    let f32s = |v: &[tryon_core::math::Vec3]| -> Vec<[f32; 3]> {
+        v.iter()
+            .map(|p| [p.x as f32, p.y as f32, p.z as f32])
+            .collect()
+    };
+    let cache = tryon_io::read_pc2(&dir.join("garment.pc2")).unwrap();
+    assert_eq!(cache.len(), frames + 1, "frame 0 and one a simulated frame");
+    for (k, rec) in run.frames.iter().enumerate() {
+        assert_eq!(cache[k], f32s(&rec.garment), "PC2 frame {k}");
+        let obj = dir.join("garment-obj").join(format!("garment_{k:05}.obj"));
+        let mesh = tryon_io::read_obj(&obj).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(f32s(&mesh.positions), f32s(&rec.garment), "OBJ frame {k}");
+        assert_eq!(mesh.faces.len(), run.garment_triangles.len());
+        assert_eq!(mesh.group_faces("dress").len(), mesh.faces.len());
+    }
+    let objs = std::fs::read_dir(dir.join("garment-obj")).unwrap().count();
+    assert_eq!(objs, frames + 1, "one OBJ a frame and nothing else");
+    let hidden: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with('.'))
+        .collect();
+    assert!(hidden.is_empty(), "left behind: {hidden:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
