@@ -1,15 +1,20 @@
 //! Caches for animation tools (issue 25, item 4): the garment's frames as a PC2 point cache and
-//! as an OBJ sequence, read back and compared with the frames the run made.
+//! as an OBJ sequence, read back and compared with the frames the run made; the run as an
+//! animated GIF.
 
 use std::path::Path;
 use tryon_pipeline::{Pipeline, Scene};
 
 #[test]
 fn pc2_and_obj_sequence_read_back_as_the_runs_frames() {
-    let sets: Vec<String> = ["output.pc2=true", "output.obj_sequence=true"]
-        .iter()
-        .map(|s| s.to_string())
-        .collect();
+    let sets: Vec<String> = [
+        "output.pc2=true",
+        "output.obj_sequence=true",
+        "output.gif=true",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
     let scene =
         Scene::parse_with_overrides(tryon_pipeline::DEMO_SCENE, Path::new("demo.toml"), &sets)
             .unwrap();
@@ -38,6 +43,28 @@ fn pc2_and_obj_sequence_read_back_as_the_runs_frames() {
         assert_eq!(mesh.faces.len(), run.garment_triangles.len());
         assert_eq!(mesh.group_faces("dress").len(), mesh.faces.len());
     }
+    // The GIF: a frame for every second frame (0, 2, 4), 320 pixels wide in the preview's
+    // proportions, each shown 2/30 s; the body's colour and the dress's in it.
+    let gif = std::fs::read(dir.join("run.gif")).unwrap();
+    let mut opts = gif::DecodeOptions::new();
+    opts.set_color_output(gif::ColorOutput::RGBA);
+    let mut d = opts.read_info(gif.as_slice()).unwrap();
+    assert_eq!((d.width(), d.height()), (320, 400));
+    let mut shown = 0;
+    while let Some(f) = d.read_next_frame().unwrap() {
+        assert_eq!(f.delay, 7, "2 frames at 30 fps, in 1/100 s");
+        let near = |c: [u8; 3]| {
+            f.buffer
+                .chunks(4)
+                .any(|p| (0..3).all(|i| p[i].abs_diff(c[i]) < 60) && p[3] > 0)
+        };
+        assert!(
+            near([205, 170, 150]) && near(tryon_io::garment_colour(0)),
+            "frame {shown}"
+        );
+        shown += 1;
+    }
+    assert_eq!(shown, 3);
     let objs = std::fs::read_dir(dir.join("garment-obj")).unwrap().count();
     assert_eq!(objs, frames + 1, "one OBJ a frame and nothing else");
     let hidden: Vec<_> = std::fs::read_dir(&dir)

@@ -78,6 +78,11 @@ fn resumes_to_the_same_bytes(tag: &str, scene: Scene, frames: usize, every: usiz
     }));
     assert!(killed.is_err(), "{tag}: the run must have been stopped");
     assert!(!cut.join("scene.glb").exists(), "{tag}");
+    // As if killed while writing the next checkpoint and an OBJ frame.
+    std::fs::write(cut.join(".checkpoint.tryon.99999.tmp"), b"half").unwrap();
+    if scene_has(&cut, "garment-obj") {
+        std::fs::write(cut.join("garment-obj/.garment_00011.obj.99999.tmp"), b"v").unwrap();
+    }
     let ck = Checkpoint::read(&cut).unwrap_or_else(|e| panic!("{tag}: {e}"));
     assert_eq!(ck.frame, stop / every * every, "{tag}: the last checkpoint");
     assert_eq!(ck.invocation, "test");
@@ -92,6 +97,7 @@ fn resumes_to_the_same_bytes(tag: &str, scene: Scene, frames: usize, every: usiz
     ];
     if scene_has(&whole, "garment.pc2") {
         files.push("garment.pc2".into());
+        files.push("run.gif".into());
         files.extend((0..=frames).map(|k| format!("garment-obj/garment_{k:05}.obj")));
     }
     for f in &files {
@@ -115,11 +121,15 @@ fn resumes_to_the_same_bytes(tag: &str, scene: Scene, frames: usize, every: usiz
         frames,
         "{tag}: one line a judged frame"
     );
-    let leftovers: Vec<_> = std::fs::read_dir(&cut)
+    let mut leftovers: Vec<_> = std::fs::read_dir(&cut)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .filter(|n| n.starts_with('.') || n == FILE)
         .collect();
+    if let Ok(objs) = std::fs::read_dir(cut.join("garment-obj")) {
+        let hidden = objs.map(|e| e.unwrap().file_name().to_string_lossy().into_owned());
+        leftovers.extend(hidden.filter(|n| n.starts_with('.')));
+    }
     assert!(leftovers.is_empty(), "{tag}: left behind {leftovers:?}");
     let _ = (
         std::fs::remove_dir_all(&whole),
@@ -131,7 +141,11 @@ fn resumes_to_the_same_bytes(tag: &str, scene: Scene, frames: usize, every: usiz
 fn the_demo_resumes_to_the_same_bytes() {
     // VBD, nearest-vertex collider, follower, PN refinement with fine collision.
     // With the caches for animation tools too.
-    let s = demo(&["output.pc2=true", "output.obj_sequence=true"]);
+    let s = demo(&[
+        "output.pc2=true",
+        "output.obj_sequence=true",
+        "output.gif=true",
+    ]);
     resumes_to_the_same_bytes("demo", s, 14, 4, 10);
 }
 

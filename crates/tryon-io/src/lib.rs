@@ -3,6 +3,7 @@
 //! and JSON reports ([`write_json`]); readers of real assets ([`read_obj`] keeping vertex order,
 //! MakeHuman [`read_mhskel`], [`read_mhw`], [`read_target`], [`read_binding`], and [`read_bvh`]).
 
+pub mod animation;
 pub mod atomic;
 pub mod bvh;
 pub mod cache;
@@ -16,6 +17,7 @@ pub mod preview;
 pub mod read;
 pub mod textured;
 
+pub use animation::{GifState, GifWriter};
 pub use atomic::{write_atomic, write_atomic_with};
 pub use bvh::{guess_unit, parse_bvh, read_bvh};
 pub use cache::{CacheError, Pc2State, Pc2Writer, read_pc2, write_obj_frame};

@@ -29,7 +29,7 @@ pub fn garment_colour(k: usize) -> [u8; 3] {
 }
 
 /// A perspective camera.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Camera {
     pub eye: Vec3,
     pub target: Vec3,

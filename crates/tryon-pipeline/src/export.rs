@@ -10,10 +10,15 @@ use crate::run::{FrameRecord, FrameSink, FrameStats, RunHeader, RunOutput, Stats
 use crate::scene::OutputSection;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
+use tryon_core::math::{Real, Vec3};
 use tryon_io::{
-    BodyExport, Camera, FramePose, GlbError, GlbHeader, GlbWriter, Pc2Writer, PreviewError,
-    PreviewMesh, SkinnedExport, garment_colour, render, write_json, write_obj_frame, write_png,
+    BodyExport, Camera, FramePose, GifWriter, GlbError, GlbHeader, GlbWriter, Pc2Writer,
+    PreviewError, PreviewMesh, SkinnedExport, garment_colour, render, write_json, write_obj_frame,
+    write_png,
 };
+
+/// The body's colour in pictures.
+const BODY_COLOUR: [u8; 3] = [205, 170, 150];
 
 /// Why an output could not be written.
 #[derive(Debug, Error)]
@@ -55,6 +60,10 @@ pub struct Outputs {
     per_frame: Option<(std::io::BufWriter<std::fs::File>, u64)>,
     /// garment.pc2 (made at the first frame, when the garment's vertex count is known).
     pc2: Option<Pc2Writer>,
+    /// run.gif, its camera as frame 0 framed it and the body's centre then (the camera follows
+    /// the body's centre from there).
+    gif: Option<(GifWriter, Camera, Vec3)>,
+    fps: Real,
     error: Option<ExportError>,
 }
 
@@ -66,6 +75,7 @@ struct OutputsState {
     frames: usize,
     per_frame_bytes: Option<u64>,
     pc2: Option<tryon_io::Pc2State>,
+    gif: Option<(tryon_io::GifState, Camera, Vec3)>,
 }
 
 impl Outputs {
@@ -87,6 +97,8 @@ impl Outputs {
             body_triangles: Vec::new(),
             per_frame: None,
             pc2: None,
+            gif: None,
+            fps: 30.0,
             error: None,
         })
     }
@@ -140,6 +152,13 @@ impl Outputs {
         if let Some(pc2) = &st.pc2 {
             out.pc2 = Some(Pc2Writer::resume(&dir.join(PC2), pc2)?);
         }
+        if out.config.gif != st.gif.is_some() {
+            return Err(bad("the checkpoint's outputs are not the scene's".into()));
+        }
+        if let Some((g, camera, centre)) = st.gif {
+            let w = GifWriter::resume(&dir.join(GIF), out.gif_shape(), g)?;
+            out.gif = Some((w, camera, centre));
+        }
         out.preview = st.preview;
         out.frames = st.frames;
         Ok(out)
@@ -151,6 +170,17 @@ impl Outputs {
         self.triangle_garment = h.triangle_garment.to_vec();
         self.garment_names = h.garment_names.to_vec();
         self.body_triangles = h.body_triangles.to_vec();
+        self.fps = h.fps;
+    }
+
+    /// The GIF's width, height and delay a frame (1/100 s).
+    fn gif_shape(&self) -> (u32, u32, u16) {
+        let c = &self.config;
+        let height = (c.gif_width as u64 * c.preview_height as u64) / c.preview_width.max(1) as u64;
+        let delay = (100.0 * c.gif_every as Real / self.fps)
+            .round()
+            .clamp(1.0, 65535.0);
+        (c.gif_width, (height as u32).max(1), delay as u16)
     }
 
     /// Writes what is left (the GLB's layout, the preview, stats.json) and returns the files
@@ -167,6 +197,10 @@ impl Outputs {
                 source,
             })?;
             written.push(path);
+        }
+        if let Some((gif, ..)) = self.gif.take() {
+            gif.finish()?;
+            written.push(self.dir.join(GIF));
         }
         if let Some(pc2) = self.pc2.take() {
             pc2.finish()?;
@@ -188,7 +222,7 @@ impl Outputs {
             let mut meshes = vec![PreviewMesh {
                 positions: &body,
                 triangles: &self.body_triangles,
-                color: [205, 170, 150],
+                color: BODY_COLOUR,
             }];
             meshes.extend(parts.iter().enumerate().map(|(k, tris)| PreviewMesh {
                 positions: &rec.garment,
@@ -215,6 +249,7 @@ impl Outputs {
 /// The PC2 cache's file and the OBJ sequence's folder in the output folder.
 const PC2: &str = "garment.pc2";
 const OBJ_DIR: &str = "garment-obj";
+const GIF: &str = "run.gif";
 
 impl Outputs {
     /// Writes frame `rec` to the caches the scene asks for (PC2, the OBJ sequence).
@@ -240,9 +275,43 @@ impl Outputs {
             let groups = (names, self.triangle_garment.as_slice());
             written = write_obj_frame(&path, &rec.garment, &self.garment_triangles, groups);
         }
+        if written.is_ok() && self.config.gif && self.frames.is_multiple_of(self.config.gif_every) {
+            written = self.gif_frame(rec);
+        }
         if let Err(e) = written {
             self.error = Some(e.into());
         }
+    }
+
+    /// Draws frame `rec` into the GIF: the body and each garment, seen by frame 0's camera moved
+    /// with the body's centre.
+    fn gif_frame(&mut self, rec: &FrameRecord) -> Result<(), tryon_io::CacheError> {
+        let parts = self.garments();
+        let mut meshes = vec![PreviewMesh {
+            positions: &rec.body,
+            triangles: &self.body_triangles,
+            color: BODY_COLOUR,
+        }];
+        meshes.extend(parts.iter().enumerate().map(|(k, tris)| PreviewMesh {
+            positions: &rec.garment,
+            triangles: tris,
+            color: garment_colour(k),
+        }));
+        let n = rec.body.len().max(1) as Real;
+        let centre = rec.body.iter().fold(Vec3::zeros(), |a, p| a + p) / n;
+        if self.gif.is_none() {
+            let (w, h, delay) = self.gif_shape();
+            let writer = GifWriter::create(&self.dir.join(GIF), w, h, delay)?;
+            self.gif = Some((writer, Camera::framing(&meshes), centre));
+        }
+        let Some((writer, first, start)) = &mut self.gif else {
+            return Ok(());
+        };
+        let mut camera = *first;
+        camera.eye += centre - *start;
+        camera.target += centre - *start;
+        let (w, h) = (writer.width(), writer.height());
+        writer.frame(&render(&meshes, &camera, w, h))
     }
 
     /// The garment triangles of each garment, in order (all in one when not told apart).
@@ -310,6 +379,10 @@ impl FrameSink for Outputs {
             Some(w) => Some(w.checkpoint().ok()?),
             None => None,
         };
+        let gif = match &mut self.gif {
+            Some((w, camera, centre)) => Some((w.checkpoint().ok()?, *camera, *centre)),
+            None => None,
+        };
         let per_frame_bytes = match &mut self.per_frame {
             Some((f, n)) => {
                 std::io::Write::flush(f).ok()?;
@@ -323,6 +396,7 @@ impl FrameSink for Outputs {
             frames: self.frames,
             per_frame_bytes,
             pc2,
+            gif,
         }))
     }
 
@@ -349,6 +423,10 @@ impl FrameSink for Outputs {
 
     fn wants_skin_offsets(&self) -> bool {
         self.glb.is_some()
+    }
+
+    fn wants_body(&self) -> bool {
+        self.config.gif
     }
 }
 
@@ -408,20 +486,20 @@ impl Pipeline {
             body_positions: &self.body_mesh.positions,
             body_triangles: &run.body_triangles,
             rig: self.body.rig().filter(|_| moving && self.motion.is_some()),
+            fps: run.stats.fps,
         });
         for f in &run.frames {
-            // Frames kept in memory carry no skin offsets (that sink does not ask for them).
-            match (
-                &f.pose,
-                out.wants_skin_offsets() && f.skin_offsets.is_empty(),
-            ) {
-                (Some(pose), true) => {
-                    let mut with = f.clone();
-                    self.body.skin_offsets_at(pose, &mut with.skin_offsets);
-                    out.frame(&with);
-                }
-                _ => out.frame(f),
+            // Frames kept in memory carry neither skin offsets nor the body (that sink does not
+            // ask for them).
+            let mut with = f.clone();
+            let offsets = out.wants_skin_offsets() && f.skin_offsets.is_empty();
+            if let Some(pose) = f.pose.as_ref().filter(|_| offsets) {
+                self.body.skin_offsets_at(pose, &mut with.skin_offsets);
             }
+            if out.wants_body() && f.body.is_empty() {
+                with.body = self.body_at(f.pose.as_ref());
+            }
+            out.frame(&with);
         }
         for f in &run.stats.per_frame {
             out.frame_stats(f);

@@ -104,6 +104,7 @@ impl Pipeline {
         }
         let (ctx, _) = self.prepare(Some(frames));
         self.restore_stages(ck.stages, &path)?;
+        remove_half_written(dir);
         let mut out = Outputs::resume(dir, &self.scene.output, &self.header(&ctx), &ck.sink)?;
         let mut writer = CheckpointWriter {
             dir,
@@ -122,6 +123,23 @@ impl Pipeline {
             files,
             no_checkpoints: writer.failed,
         })
+    }
+}
+
+/// Removes what a killed run left half written in `dir`: the temporary files of a checkpoint
+/// or of an OBJ frame being written atomically when it was killed (`.NAME.PID.tmp`).
+fn remove_half_written(dir: &Path) {
+    for folder in [dir.to_path_buf(), dir.join("garment-obj")] {
+        let Ok(entries) = std::fs::read_dir(&folder) else {
+            continue;
+        };
+        for e in entries.flatten() {
+            let name = e.file_name().to_string_lossy().into_owned();
+            let ours = name.starts_with(&format!(".{FILE}.")) || name.starts_with(".garment_");
+            if ours && name.ends_with(".tmp") {
+                let _ = std::fs::remove_file(e.path());
+            }
+        }
     }
 }
 

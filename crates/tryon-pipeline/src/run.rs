@@ -24,6 +24,8 @@ pub struct FrameRecord {
     /// What the body adds after skinning in that pose (its press), as offsets of rest-mesh
     /// vertices (`BodyModel::skin_offsets_at`); only when the sink asks for them.
     pub skin_offsets: Vec<(u32, Vec3)>,
+    /// The body's positions in that frame, only when the sink asks for them (`wants_body`).
+    pub body: Vec<Vec3>,
 }
 
 /// What a run's sinks learn before the first frame: what stays the same over the run.
@@ -39,6 +41,8 @@ pub struct RunHeader<'a> {
     pub body_triangles: &'a [[u32; 3]],
     /// The body's rig when it moves (every frame then carries its pose).
     pub rig: Option<tryon_core::stages::Rig<'a>>,
+    /// Output frames a second.
+    pub fps: Real,
 }
 
 /// Where a run's frames go as they are made (an exporter streaming them to files, or memory).
@@ -50,6 +54,10 @@ pub trait FrameSink {
     fn frame(&mut self, record: &FrameRecord);
     /// Whether records should carry the body's skin offsets (they cost a second skinning).
     fn wants_skin_offsets(&self) -> bool {
+        false
+    }
+    /// Whether records should carry the body's positions (a picture of every frame needs them).
+    fn wants_body(&self) -> bool {
         false
     }
     /// The referee's figures of a judged frame, after its record.
@@ -260,6 +268,7 @@ impl Pipeline {
             body_positions: &self.body_mesh.positions,
             body_triangles: &ctx.body_triangles,
             rig: self.body.rig().filter(|_| ctx.moving),
+            fps: self.fps,
         }
     }
 
@@ -271,6 +280,7 @@ impl Pipeline {
             time: 0.0,
             garment: self.output_garment().to_vec(),
             skin_offsets: self.skin_offsets(&*sink, pose0.as_ref()),
+            body: self.body_for(&*sink, pose0.as_ref()),
             pose: pose0,
         });
     }
@@ -334,6 +344,7 @@ impl Pipeline {
                 time: self.frame_time(k),
                 garment: output.clone(),
                 skin_offsets: self.skin_offsets(&*sink, pose.as_ref()),
+                body: self.body_for(&*sink, pose.as_ref()),
                 pose,
             });
             if let Some(f) = state.stats.per_frame.last().filter(|f| f.frame == k) {
@@ -514,6 +525,14 @@ impl Pipeline {
 }
 
 impl Pipeline {
+    /// The body's positions in `pose` (or at rest), when the sink asks for them.
+    fn body_for(&self, sink: &dyn FrameSink, pose: Option<&Pose>) -> Vec<Vec3> {
+        match sink.wants_body() {
+            true => self.body_at(pose),
+            false => Vec::new(),
+        }
+    }
+
     /// The body's skin offsets in `pose`, when the sink asks for them.
     fn skin_offsets(&self, sink: &dyn FrameSink, pose: Option<&Pose>) -> Vec<(u32, Vec3)> {
         let mut out = Vec::new();

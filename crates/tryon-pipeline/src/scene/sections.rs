@@ -364,6 +364,15 @@ pub struct OutputSection {
     /// garment-obj/garment_NNNNN.obj: the garment as one OBJ a frame (an OBJ sequence), each
     /// garment its own group.
     pub obj_sequence: bool,
+    /// run.gif: the whole run as an animated GIF beside the still preview (the body and each
+    /// garment in their colours, the camera following the body).
+    pub gif: bool,
+    /// The GIF's width (pixels; its height keeps the preview's proportions).
+    #[schemars(range(min = 16, max = 2048))]
+    pub gif_width: u32,
+    /// Draw every n-th frame into the GIF.
+    #[schemars(range(min = 1, max = 1000))]
+    pub gif_every: usize,
 }
 
 impl Default for OutputSection {
@@ -378,6 +387,9 @@ impl Default for OutputSection {
             referee_every: 1,
             pc2: false,
             obj_sequence: false,
+            gif: false,
+            gif_width: 320,
+            gif_every: 2,
         }
     }
 }
