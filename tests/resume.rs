@@ -145,6 +145,7 @@ fn the_demo_resumes_to_the_same_bytes() {
         "output.pc2=true",
         "output.obj_sequence=true",
         "output.gif=true",
+        "output.usd=true",
     ]);
     resumes_to_the_same_bytes("demo", s, 14, 4, 10);
 }

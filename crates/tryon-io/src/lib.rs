@@ -16,6 +16,7 @@ pub mod obj;
 pub mod preview;
 pub mod read;
 pub mod textured;
+pub mod usd;
 
 pub use animation::{GifState, GifWriter};
 pub use atomic::{write_atomic, write_atomic_with};
@@ -28,6 +29,7 @@ pub use obj::{parse_obj, read_obj};
 pub use preview::{Camera, Image, PreviewError, PreviewMesh, garment_colour, render, write_png};
 pub use read::ReadError;
 pub use textured::{Texture, TexturedError, TexturedMesh, render_textured, write_textured_glb};
+pub use usd::{UsdMesh, UsdState, UsdWriter};
 
 /// Writes `value` as pretty JSON, atomically.
 pub fn write_json<T: serde::Serialize>(path: &std::path::Path, value: &T) -> std::io::Result<()> {

@@ -5,6 +5,8 @@
 //! kept) and stats.json (at the end). With checkpoints, the outputs' state goes into each one
 //! and a resumed run's outputs go on from it (`checkpoint`).
 
+mod caches;
+
 use crate::pipeline::Pipeline;
 use crate::run::{FrameRecord, FrameSink, FrameStats, RunHeader, RunOutput, Stats};
 use crate::scene::OutputSection;
@@ -13,9 +15,10 @@ use thiserror::Error;
 use tryon_core::math::{Real, Vec3};
 use tryon_io::{
     BodyExport, Camera, FramePose, GifWriter, GlbError, GlbHeader, GlbWriter, Pc2Writer,
-    PreviewError, PreviewMesh, SkinnedExport, garment_colour, render, write_json, write_obj_frame,
-    write_png,
+    PreviewError, SkinnedExport, UsdWriter, render, write_json, write_png,
 };
+
+use caches::{GIF, OBJ_DIR, PC2, USD};
 
 /// The body's colour in pictures.
 const BODY_COLOUR: [u8; 3] = [205, 170, 150];
@@ -63,6 +66,8 @@ pub struct Outputs {
     /// run.gif, its camera as frame 0 framed it and the body's centre then (the camera follows
     /// the body's centre from there).
     gif: Option<(GifWriter, Camera, Vec3)>,
+    /// run.usda (made at the first frame) and its meshes' point counts.
+    usd: Option<(UsdWriter, Vec<usize>)>,
     fps: Real,
     error: Option<ExportError>,
 }
@@ -76,6 +81,7 @@ struct OutputsState {
     per_frame_bytes: Option<u64>,
     pc2: Option<tryon_io::Pc2State>,
     gif: Option<(tryon_io::GifState, Camera, Vec3)>,
+    usd: Option<(tryon_io::UsdState, Vec<usize>)>,
 }
 
 impl Outputs {
@@ -98,6 +104,7 @@ impl Outputs {
             per_frame: None,
             pc2: None,
             gif: None,
+            usd: None,
             fps: 30.0,
             error: None,
         })
@@ -159,6 +166,14 @@ impl Outputs {
             let w = GifWriter::resume(&dir.join(GIF), out.gif_shape(), g)?;
             out.gif = Some((w, camera, centre));
         }
+        if out.config.usd != st.usd.is_some() {
+            return Err(bad("the checkpoint's outputs are not the scene's".into()));
+        }
+        if let Some((u, points)) = st.usd {
+            let meshes = out.usd_meshes(&points);
+            let w = UsdWriter::resume(&dir.join(USD), out.fps, meshes, &u)?;
+            out.usd = Some((w, points));
+        }
         out.preview = st.preview;
         out.frames = st.frames;
         Ok(out)
@@ -206,6 +221,10 @@ impl Outputs {
             pc2.finish()?;
             written.push(self.dir.join(PC2));
         }
+        if let Some((usd, _)) = self.usd.take() {
+            usd.finish()?;
+            written.push(self.dir.join(USD));
+        }
         if self.config.obj_sequence && self.frames > 0 {
             written.push(self.dir.join(OBJ_DIR));
         }
@@ -219,16 +238,7 @@ impl Outputs {
             let path = self.dir.join("preview.png");
             let body = p.body_at(rec.pose.as_ref());
             let parts = self.garments();
-            let mut meshes = vec![PreviewMesh {
-                positions: &body,
-                triangles: &self.body_triangles,
-                color: BODY_COLOUR,
-            }];
-            meshes.extend(parts.iter().enumerate().map(|(k, tris)| PreviewMesh {
-                positions: &rec.garment,
-                triangles: tris,
-                color: garment_colour(k),
-            }));
+            let meshes = caches::picture(&self.body_triangles, &body, &rec.garment, &parts);
             let cam = Camera::framing(&meshes);
             let (w, h) = (self.config.preview_width, self.config.preview_height);
             write_png(&path, &render(&meshes, &cam, w, h))?;
@@ -243,86 +253,6 @@ impl Outputs {
             written.push(path);
         }
         Ok(written)
-    }
-}
-
-/// The PC2 cache's file and the OBJ sequence's folder in the output folder.
-const PC2: &str = "garment.pc2";
-const OBJ_DIR: &str = "garment-obj";
-const GIF: &str = "run.gif";
-
-impl Outputs {
-    /// Writes frame `rec` to the caches the scene asks for (PC2, the OBJ sequence).
-    fn cache_frame(&mut self, rec: &FrameRecord) {
-        if self.error.is_some() {
-            return;
-        }
-        let mut written = Ok(());
-        if self.config.pc2 {
-            if self.pc2.is_none() {
-                match Pc2Writer::create(&self.dir.join(PC2), rec.garment.len()) {
-                    Ok(w) => self.pc2 = Some(w),
-                    Err(e) => written = Err(e),
-                }
-            }
-            if let Some(w) = &mut self.pc2 {
-                written = written.and_then(|()| w.frame(&rec.garment));
-            }
-        }
-        if self.config.obj_sequence && written.is_ok() {
-            let path = (self.dir.join(OBJ_DIR)).join(format!("garment_{:05}.obj", self.frames));
-            let names = self.garment_names.as_slice();
-            let groups = (names, self.triangle_garment.as_slice());
-            written = write_obj_frame(&path, &rec.garment, &self.garment_triangles, groups);
-        }
-        if written.is_ok() && self.config.gif && self.frames.is_multiple_of(self.config.gif_every) {
-            written = self.gif_frame(rec);
-        }
-        if let Err(e) = written {
-            self.error = Some(e.into());
-        }
-    }
-
-    /// Draws frame `rec` into the GIF: the body and each garment, seen by frame 0's camera moved
-    /// with the body's centre.
-    fn gif_frame(&mut self, rec: &FrameRecord) -> Result<(), tryon_io::CacheError> {
-        let parts = self.garments();
-        let mut meshes = vec![PreviewMesh {
-            positions: &rec.body,
-            triangles: &self.body_triangles,
-            color: BODY_COLOUR,
-        }];
-        meshes.extend(parts.iter().enumerate().map(|(k, tris)| PreviewMesh {
-            positions: &rec.garment,
-            triangles: tris,
-            color: garment_colour(k),
-        }));
-        let n = rec.body.len().max(1) as Real;
-        let centre = rec.body.iter().fold(Vec3::zeros(), |a, p| a + p) / n;
-        if self.gif.is_none() {
-            let (w, h, delay) = self.gif_shape();
-            let writer = GifWriter::create(&self.dir.join(GIF), w, h, delay)?;
-            self.gif = Some((writer, Camera::framing(&meshes), centre));
-        }
-        let Some((writer, first, start)) = &mut self.gif else {
-            return Ok(());
-        };
-        let mut camera = *first;
-        camera.eye += centre - *start;
-        camera.target += centre - *start;
-        let (w, h) = (writer.width(), writer.height());
-        writer.frame(&render(&meshes, &camera, w, h))
-    }
-
-    /// The garment triangles of each garment, in order (all in one when not told apart).
-    fn garments(&self) -> Vec<Vec<[u32; 3]>> {
-        let n = self.triangle_garment.iter().map(|&g| g as usize + 1).max();
-        let mut parts = vec![Vec::new(); n.unwrap_or(1)];
-        for (k, t) in self.garment_triangles.iter().enumerate() {
-            let g = self.triangle_garment.get(k).copied().unwrap_or(0) as usize;
-            parts[g].push(*t);
-        }
-        parts
     }
 }
 
@@ -383,6 +313,10 @@ impl FrameSink for Outputs {
             Some((w, camera, centre)) => Some((w.checkpoint().ok()?, *camera, *centre)),
             None => None,
         };
+        let usd = match &mut self.usd {
+            Some((w, points)) => Some((w.checkpoint().ok()?, points.clone())),
+            None => None,
+        };
         let per_frame_bytes = match &mut self.per_frame {
             Some((f, n)) => {
                 std::io::Write::flush(f).ok()?;
@@ -397,6 +331,7 @@ impl FrameSink for Outputs {
             per_frame_bytes,
             pc2,
             gif,
+            usd,
         }))
     }
 
@@ -426,7 +361,7 @@ impl FrameSink for Outputs {
     }
 
     fn wants_body(&self) -> bool {
-        self.config.gif
+        self.config.gif || (self.config.usd && self.config.usd_body)
     }
 }
 

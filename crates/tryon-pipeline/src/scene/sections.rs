@@ -373,6 +373,11 @@ pub struct OutputSection {
     /// Draw every n-th frame into the GIF.
     #[schemars(range(min = 1, max = 1000))]
     pub gif_every: usize,
+    /// run.usda: a USD stage (Houdini, Omniverse, Blender, Maya, usdview) with the garment's
+    /// points time-sampled every frame, each garment a `GeomSubset`.
+    pub usd: bool,
+    /// Put the moving body into run.usda too (time-sampled points; a collider in Houdini).
+    pub usd_body: bool,
 }
 
 impl Default for OutputSection {
@@ -390,6 +395,8 @@ impl Default for OutputSection {
             gif: false,
             gif_width: 320,
             gif_every: 2,
+            usd: false,
+            usd_body: true,
         }
     }
 }
