@@ -77,10 +77,11 @@ fn pc2_and_obj_sequence_read_back_as_the_runs_frames() {
 }
 
 /// What `tools/usd-check/read_stage.py` (Pixar's USD library) reads of a stage; `None` when this
-/// machine has no usd-core and `TRYON_REQUIRE_USD` is unset (CI sets it and installs usd-core).
+/// machine has no usd-core and `TRYON_REQUIRE_PYTHON` is unset (.ci/run sets it and installs
+/// usd-core).
 fn read_with_usd(stage: &Path) -> Option<serde_json::Value> {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tools/usd-check/read_stage.py");
-    let required = std::env::var_os("TRYON_REQUIRE_USD").is_some();
+    let required = std::env::var_os("TRYON_REQUIRE_PYTHON").is_some();
     let has_usd = std::process::Command::new("python3")
         .args(["-c", "import pxr.Usd"])
         .output()
@@ -88,7 +89,7 @@ fn read_with_usd(stage: &Path) -> Option<serde_json::Value> {
     if !has_usd {
         assert!(
             !required,
-            "TRYON_REQUIRE_USD is set and python3 cannot import pxr (usd-core)"
+            "TRYON_REQUIRE_PYTHON is set and python3 cannot import pxr (usd-core)"
         );
         eprintln!("skipping the USD read-back: no usd-core on this machine");
         return None;

@@ -14,7 +14,7 @@ const USAGE: &str = "usage: cargo xtask <command>
 commands:
   ci                 cargo fmt --check, clippy -D warnings, tidy, fuzz --quick, all tests,
                      tradeoff --quick
-  bench [ARGS..]     criterion benchmarks (cargo bench -p tryon-benches -- ARGS)
+  bench [ARGS..]     criterion benchmarks (cargo bench -p tryon-benches -p tryon-cli -- ARGS)
   drape [N..] [--integrator rk4|symplectic_euler|all] [--frames F] [--trace] [--set KEY=VALUE] [--png FILE]
                      run the drape scene (release) and print ms/frame, stretch, penetration
   tradeoff [--quick] [--summary FILE]
@@ -171,7 +171,8 @@ fn cargo_test_tally(args: &[&str]) -> Result<(u64, u64), String> {
 }
 
 fn bench(args: &[String]) -> Result<(), String> {
-    let mut a = vec!["bench", "-p", "tryon-benches", "--"];
+    // tryon-cli's bench runs the `tryon` binary (`tryon batch`).
+    let mut a = vec!["bench", "-p", "tryon-benches", "-p", "tryon-cli", "--"];
     a.extend(args.iter().map(String::as_str));
     cargo(&a)
 }

@@ -2,178 +2,23 @@
 //! `tryon inspect FILE`.
 //! Exit codes: 0 success, 2 bad input (the message names the file, line, key or value), 1 an
 //! internal error (an output that could not be written, a failed export), 3 a `--strict` run whose
-//! garment left the body (its outputs written).
+//! garment left the body (its outputs written), 4 a `batch` some of whose jobs failed (the others'
+//! outputs and the summary written).
 
+mod args;
+mod batch;
 mod report;
 mod resume;
 
-use clap::{Parser, Subcommand};
+use args::{BudgetFlags, Cli, Command, RunFlags, TargetShapes};
+use clap::Parser;
 use report::run;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use tryon_pipeline::budget::Limits;
 use tryon_pipeline::{Options, Pipeline, Scene};
 
 /// The exit status of a `--strict` run whose garment left the body.
 const LEFT_THE_BODY: u8 = 3;
-
-#[derive(Parser, Debug)]
-#[command(
-    name = "tryon",
-    version,
-    about = "Real-time cloth simulation and virtual try-on"
-)]
-struct Cli {
-    #[command(subcommand)]
-    command: Command,
-}
-
-/// How a run is made, shared by `demo` and `run`.
-#[derive(clap::Args, Debug)]
-struct RunFlags {
-    /// Simulate only this many frames, at least 1 (default: the scene's duration times its fps).
-    #[arg(long, value_parser = frame_count)]
-    frames: Option<usize>,
-    /// No progress bar or summary.
-    #[arg(long, short)]
-    quiet: bool,
-    /// Exit with status 3 when the garment left the body (stats.json's detached_share over 0),
-    /// after writing every output.
-    #[arg(long)]
-    strict: bool,
-    /// Write a checkpoint into the output folder every N frames (0: none); a killed run goes on
-    /// from the last one with `tryon run --resume DIR`.
-    #[arg(long, value_name = "N", default_value_t = 100)]
-    checkpoint_every: usize,
-    #[command(flatten)]
-    budget: BudgetFlags,
-}
-
-/// The limits a scene's estimate is held against before it runs.
-#[derive(clap::Args, Debug)]
-struct BudgetFlags {
-    /// Raise (or lower) a limit the scene's estimate is held against before it runs, e.g.
-    /// `--limit hours=12` (repeatable; keys: frames, particles, fine_vertices, substeps,
-    /// memory_gb, hours, glb_gb).
-    #[arg(long = "limit", value_name = "KEY=VALUE", value_parser = limit_arg)]
-    limits: Vec<String>,
-}
-
-impl BudgetFlags {
-    fn limits(&self) -> Limits {
-        let mut l = Limits::default();
-        for a in &self.limits {
-            // Checked as the arguments were parsed.
-            let _ = l.set(a);
-        }
-        l
-    }
-}
-
-/// `--limit`: one `KEY=VALUE` the limits take.
-fn limit_arg(s: &str) -> Result<String, String> {
-    Limits::default().set(s).map(|()| s.to_string())
-}
-
-#[derive(Subcommand, Debug)]
-enum Command {
-    /// Run the embedded default: the mannequin in a dress, walking (no files needed).
-    Demo {
-        /// Output directory (scene.glb, preview.png, stats.json).
-        #[arg(long, default_value = "out/demo")]
-        out: PathBuf,
-        #[command(flatten)]
-        flags: RunFlags,
-        /// Override a value of the embedded scene, e.g. `--set effects.wrinkles=true` (repeatable).
-        #[arg(long = "set", value_name = "TABLE.KEY=VALUE")]
-        sets: Vec<String>,
-    },
-    /// Run a scene file, or go on with a killed run (`--resume DIR`).
-    Run {
-        /// The scene file (TOML; see docs/scenes.md for every key).
-        #[arg(required_unless_present = "resume")]
-        scene: Option<PathBuf>,
-        /// Output directory; default out/<scene name>.
-        #[arg(long)]
-        out: Option<PathBuf>,
-        /// Go on with the run whose output folder is DIR from its last checkpoint, as it was
-        /// asked for (scene, overrides, frames, limits); the outputs end as an uninterrupted
-        /// run's would.
-        #[arg(long, value_name = "DIR", conflicts_with_all = ["scene", "out", "sets", "frames", "limits"])]
-        resume: Option<PathBuf>,
-        #[command(flatten)]
-        flags: RunFlags,
-        /// Override a scene value, e.g. `--set effects.body_collision=sdf` (repeatable).
-        #[arg(long = "set", value_name = "TABLE.KEY=VALUE")]
-        sets: Vec<String>,
-    },
-    /// Validate a scene file (parse, check values, assemble) without running it, and list the
-    /// stages it assembles.
-    Check {
-        /// The scene file (TOML).
-        scene: PathBuf,
-        /// Override a scene value before checking, as `run --set` does (repeatable).
-        #[arg(long = "set", value_name = "TABLE.KEY=VALUE")]
-        sets: Vec<String>,
-        #[command(flatten)]
-        budget: BudgetFlags,
-    },
-    /// Write the picture folds are drawn on (P3): the scene's garment as dressed on the body at
-    /// the start, framed as the preview frames it, at `[output] preview_width` x `preview_height`.
-    /// A `[[fold]] screen` line is given in this picture's pixels.
-    Canvas {
-        /// The scene file (TOML).
-        scene: PathBuf,
-        /// The PNG to write; default out/<scene name>/canvas.png.
-        #[arg(long)]
-        out: Option<PathBuf>,
-        /// Override a scene value, as `run --set` does (repeatable).
-        #[arg(long = "set", value_name = "TABLE.KEY=VALUE")]
-        sets: Vec<String>,
-    },
-    /// Fit a kimono to body measurements (P2): tailoring dimensions by the standard formulas, the
-    /// blend-shape fit per sub-mesh, the print correction. Writes kimono.glb (with the bolt's
-    /// print), before.png and after.png (the print before and after its correction) and fit.json
-    /// (Table 1: target, initial, fitted value and relative error per dimension).
-    Kimono {
-        /// Height, m.
-        #[arg(long)]
-        height: f64,
-        /// Bust girth, m.
-        #[arg(long)]
-        bust: f64,
-        /// Waist girth, m.
-        #[arg(long)]
-        waist: f64,
-        /// Hip girth, m.
-        #[arg(long)]
-        hip: f64,
-        /// 裄: back-neck centre to the wrist bone, arm 45° down, m (default: height x 0.4 + 0.02).
-        #[arg(long)]
-        yuki: Option<f64>,
-        /// 袖丈: sleeve length, m (default: height x 0.3).
-        #[arg(long)]
-        sleeve_length: Option<f64>,
-        /// The target shapes blended: laid flat (the default: the bounds hold there), or
-        /// worn on mannequins of their sizes (made by `cargo xtask kimono-targets`, built in;
-        /// their crumpled back collar fits to 13% and their print is measured on a crumpled
-        /// surface).
-        #[arg(long, value_enum, default_value_t = TargetShapes::Flat)]
-        targets: TargetShapes,
-        /// Output directory.
-        #[arg(long, default_value = "out/kimono")]
-        out: PathBuf,
-        /// No table.
-        #[arg(long, short)]
-        quiet: bool,
-    },
-    /// Summarise an asset: OBJ, BVH or MakeHuman file (counts, joints, frames, fps, bounding box,
-    /// likely units).
-    Inspect {
-        /// The file: .obj, .bvh, .mhskel, .mhw, .target, .mhclo or .proxy.
-        file: PathBuf,
-    },
-}
 
 /// A failure and the exit code it maps to.
 enum Failure {
@@ -181,6 +26,8 @@ enum Failure {
     Internal(String),
     /// A `--strict` run whose garment left the body (the summary said so).
     LeftTheBody,
+    /// A batch some of whose jobs failed.
+    JobsFailed(String),
 }
 
 fn load(path: &Path, sets: &[String]) -> Result<Scene, Failure> {
@@ -273,17 +120,6 @@ fn strict(left: bool, strict: bool) -> Result<(), Failure> {
     }
 }
 
-/// `--frames`: a whole number of frames, at least 1.
-fn frame_count(s: &str) -> Result<usize, String> {
-    match s.parse::<usize>() {
-        Ok(0) => Err("a run has at least 1 frame".into()),
-        Ok(n) => Ok(n),
-        Err(_) => Err(format!(
-            "`{s}` is not a whole number of frames (at least 1)"
-        )),
-    }
-}
-
 /// The joint-naming scheme retargeting will use for a BVH or .mhskel file, if one fits.
 fn naming_scheme(file: &Path) -> Option<&'static str> {
     let ext = file.extension()?.to_str()?.to_ascii_lowercase();
@@ -332,6 +168,25 @@ fn main() -> ExitCode {
                 run_scene(s, (Some(&scene), &sets), &out, &flags)
             })
         }
+        Command::Batch {
+            manifest,
+            shard,
+            jobs,
+            threads,
+            list,
+            summary,
+            quiet,
+        } => batch::run(
+            &manifest,
+            &batch::BatchFlags {
+                shard,
+                jobs,
+                threads,
+                list,
+                summary,
+                quiet,
+            },
+        ),
         Command::Inspect { file } => tryon_io::inspect::summarize(&file)
             .map(|text| {
                 print!("{text}");
@@ -425,14 +280,11 @@ fn main() -> ExitCode {
             ExitCode::from(1)
         }
         Err(Failure::LeftTheBody) => ExitCode::from(LEFT_THE_BODY),
+        Err(Failure::JobsFailed(m)) => {
+            eprintln!("error: {m}");
+            ExitCode::from(4)
+        }
     }
-}
-
-/// `tryon kimono --targets`.
-#[derive(Clone, Copy, Debug, clap::ValueEnum)]
-enum TargetShapes {
-    Worn,
-    Flat,
 }
 
 /// `tryon kimono`: fit, write, print Table 1.
