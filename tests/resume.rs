@@ -94,7 +94,11 @@ fn resumes_to_the_same_bytes(tag: &str, scene: Scene, frames: usize, every: usiz
         "scene.glb".to_string(),
         "preview.png".into(),
         "frames.jsonl".into(),
+        "view.bin".into(),
     ];
+    if scene_has(&whole, "run.usda") {
+        files.push("run.usda".into());
+    }
     if scene_has(&whole, "garment.pc2") {
         files.push("garment.pc2".into());
         files.push("run.gif".into());

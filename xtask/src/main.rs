@@ -1,11 +1,12 @@
 //! cargo xtask: project automation. `ci` (fmt, clippy, tests, tidy), `bench`, `drape`, `tidy`,
-//! `tradeoff`, `outputs`, `kimono-targets`, `fuzz`.
+//! `tradeoff`, `outputs`, `kimono-targets`, `fuzz`, `viewer`.
 
 mod drape;
 mod fuzz;
 mod fuzz_mutate;
 mod outputs;
 mod tidy;
+mod viewer;
 
 use std::process::{Command, ExitCode};
 
@@ -33,6 +34,8 @@ commands:
                      each by default, --quick 3,000; a panic or a case over 60 s fails, its input
                      saved under target/fuzz/failures/; counts in target/fuzz/summary.md
   docs               regenerate docs/scenes.md (every scene key) from the schema
+  viewer             rebuild tryon view's page bundle (three.js and tools/viewer/src, by esbuild)
+                     into crates/tryon-view/assets/viewer.js
   tidy               check the architecture invariants and that docs/scenes.md is current";
 
 fn main() -> ExitCode {
@@ -45,6 +48,7 @@ fn main() -> ExitCode {
         Some("fuzz") => fuzz::run(&args[1..]),
         Some("outputs") => outputs::run(&args[1..]),
         Some("docs") => tidy::write_scene_docs(),
+        Some("viewer") => viewer::build(),
         Some("tradeoff") => tradeoff(&args[1..]),
         Some("kimono-targets") => kimono_targets(&args[1..]),
         Some("-h" | "--help" | "help") => {
@@ -102,6 +106,9 @@ fn install_gltf_validator() -> Result<(), String> {
 
 fn ci() -> Result<(), String> {
     install_gltf_validator()?;
+    // The viewer's packages (the browser test drives Chromium with playwright-core), and the
+    // committed page bundle current with its sources.
+    viewer::check()?;
     cargo(&["fmt", "--all", "--", "--check"])?;
     cargo(&[
         "clippy",

@@ -62,7 +62,7 @@ pub fn run() -> Result<(), String> {
         if STAGES.contains(&name.as_str()) {
             for other in STAGES
                 .iter()
-                .chain(["tryon-pipeline", "tryon-io", "tryon-cli"].iter())
+                .chain(["tryon-pipeline", "tryon-io", "tryon-cli", "tryon-view"].iter())
             {
                 if *other != name
                     && manifest.lines().any(|l| {

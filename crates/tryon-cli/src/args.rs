@@ -182,6 +182,16 @@ pub(crate) enum Command {
         #[arg(long, short)]
         quiet: bool,
     },
+    /// Watch a finished run in the browser: serves the run's folder on 127.0.0.1 and prints the
+    /// page's address (play, scrub, toggle body, garment and coarse cloth, colour by stretch,
+    /// the per-frame figures). Runs until stopped (Ctrl-C).
+    View {
+        /// A run's output folder (it holds view.bin).
+        dir: PathBuf,
+        /// The port (0: any free one).
+        #[arg(long, default_value_t = 8737)]
+        port: u16,
+    },
     /// Summarise an asset: OBJ, BVH or MakeHuman file (counts, joints, frames, fps, bounding box,
     /// likely units).
     Inspect {

@@ -187,6 +187,7 @@ fn main() -> ExitCode {
                 quiet,
             },
         ),
+        Command::View { dir, port } => view(&dir, port),
         Command::Inspect { file } => tryon_io::inspect::summarize(&file)
             .map(|text| {
                 print!("{text}");
@@ -285,6 +286,25 @@ fn main() -> ExitCode {
             ExitCode::from(4)
         }
     }
+}
+
+/// `tryon view DIR`: serves the run until the process is stopped.
+fn view(dir: &Path, port: u16) -> Result<(), Failure> {
+    if dir.is_file() {
+        return Err(Failure::BadInput(format!(
+            "{}: a file; `tryon view` takes a run's output folder (run the scene, then view its folder)",
+            dir.display()
+        )));
+    }
+    let files = tryon_view::RunFiles::read(dir).map_err(|e| Failure::BadInput(e.to_string()))?;
+    let (name, frames) = (files.name.clone(), files.frames);
+    tryon_view::serve(files, port, |addr| {
+        println!("tryon view: {name}, {frames} frames: http://{addr}/ (Ctrl-C stops)");
+    })
+    .map_err(|e| match e {
+        e @ tryon_view::ViewError::Listen { .. } => Failure::BadInput(e.to_string()),
+        e => Failure::Internal(e.to_string()),
+    })
 }
 
 /// `tryon kimono`: fit, write, print Table 1.

@@ -17,6 +17,7 @@ pub mod preview;
 pub mod read;
 pub mod textured;
 pub mod usd;
+pub mod view;
 
 pub use animation::{GifState, GifWriter};
 pub use atomic::{write_atomic, write_atomic_with};
@@ -30,6 +31,7 @@ pub use preview::{Camera, Image, PreviewError, PreviewMesh, garment_colour, rend
 pub use read::ReadError;
 pub use textured::{Texture, TexturedError, TexturedMesh, render_textured, write_textured_glb};
 pub use usd::{UsdMesh, UsdState, UsdWriter};
+pub use view::{ViewGarment, ViewHeader, ViewMesh, ViewWriter, read_view_header};
 
 /// Writes `value` as pretty JSON, atomically.
 pub fn write_json<T: serde::Serialize>(path: &std::path::Path, value: &T) -> std::io::Result<()> {

@@ -18,7 +18,7 @@ use tryon_io::{
     PreviewError, SkinnedExport, UsdWriter, render, write_json, write_png,
 };
 
-use caches::{GIF, OBJ_DIR, PC2, USD};
+use caches::{GIF, OBJ_DIR, PC2, USD, VIEW};
 
 /// The body's colour in pictures.
 const BODY_COLOUR: [u8; 3] = [205, 170, 150];
@@ -68,6 +68,10 @@ pub struct Outputs {
     gif: Option<(GifWriter, Camera, Vec3)>,
     /// run.usda (made at the first frame) and its meshes' point counts.
     usd: Option<(UsdWriter, Vec<usize>)>,
+    /// view.bin (made at the first frame) and its meshes' vertex counts (body, coarse, garment).
+    view: Option<(tryon_io::ViewWriter, [usize; 3])>,
+    coarse_triangles: Vec<[u32; 3]>,
+    name: String,
     fps: Real,
     error: Option<ExportError>,
 }
@@ -82,6 +86,7 @@ struct OutputsState {
     pc2: Option<tryon_io::Pc2State>,
     gif: Option<(tryon_io::GifState, Camera, Vec3)>,
     usd: Option<(tryon_io::UsdState, Vec<usize>)>,
+    view: Option<(u64, [usize; 3])>,
 }
 
 impl Outputs {
@@ -105,6 +110,9 @@ impl Outputs {
             pc2: None,
             gif: None,
             usd: None,
+            view: None,
+            coarse_triangles: Vec::new(),
+            name: String::new(),
             fps: 30.0,
             error: None,
         })
@@ -174,6 +182,14 @@ impl Outputs {
             let w = UsdWriter::resume(&dir.join(USD), out.fps, meshes, &u)?;
             out.usd = Some((w, points));
         }
+        if out.config.view != st.view.is_some() {
+            return Err(bad("the checkpoint's outputs are not the scene's".into()));
+        }
+        if let Some((frames, counts)) = st.view {
+            let header = out.view_header(counts);
+            let w = tryon_io::ViewWriter::resume(&dir.join(VIEW), header, frames)?;
+            out.view = Some((w, counts));
+        }
         out.preview = st.preview;
         out.frames = st.frames;
         Ok(out)
@@ -185,6 +201,8 @@ impl Outputs {
         self.triangle_garment = h.triangle_garment.to_vec();
         self.garment_names = h.garment_names.to_vec();
         self.body_triangles = h.body_triangles.to_vec();
+        self.coarse_triangles = h.coarse_triangles.to_vec();
+        self.name = h.name.to_string();
         self.fps = h.fps;
     }
 
@@ -224,6 +242,10 @@ impl Outputs {
         if let Some((usd, _)) = self.usd.take() {
             usd.finish()?;
             written.push(self.dir.join(USD));
+        }
+        if let Some((view, _)) = self.view.take() {
+            view.finish()?;
+            written.push(self.dir.join(VIEW));
         }
         if self.config.obj_sequence && self.frames > 0 {
             written.push(self.dir.join(OBJ_DIR));
@@ -317,6 +339,10 @@ impl FrameSink for Outputs {
             Some((w, points)) => Some((w.checkpoint().ok()?, points.clone())),
             None => None,
         };
+        let view = match &mut self.view {
+            Some((w, counts)) => Some((w.checkpoint().ok()?, *counts)),
+            None => None,
+        };
         let per_frame_bytes = match &mut self.per_frame {
             Some((f, n)) => {
                 std::io::Write::flush(f).ok()?;
@@ -332,6 +358,7 @@ impl FrameSink for Outputs {
             pc2,
             gif,
             usd,
+            view,
         }))
     }
 
@@ -361,7 +388,11 @@ impl FrameSink for Outputs {
     }
 
     fn wants_body(&self) -> bool {
-        self.config.gif || (self.config.usd && self.config.usd_body)
+        self.config.gif || (self.config.usd && self.config.usd_body) || self.config.view
+    }
+
+    fn wants_coarse(&self) -> bool {
+        self.config.view
     }
 }
 
@@ -422,6 +453,7 @@ impl Pipeline {
             body_triangles: &run.body_triangles,
             rig: self.body.rig().filter(|_| moving && self.motion.is_some()),
             fps: run.stats.fps,
+            coarse_triangles: &[],
         });
         for f in &run.frames {
             // Frames kept in memory carry neither skin offsets nor the body (that sink does not

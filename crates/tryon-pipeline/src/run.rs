@@ -26,6 +26,10 @@ pub struct FrameRecord {
     pub skin_offsets: Vec<(u32, Vec3)>,
     /// The body's positions in that frame, only when the sink asks for them (`wants_body`).
     pub body: Vec<Vec3>,
+    /// The coarse cloth's positions when the output is a refined surface and the sink asks for
+    /// them (`wants_coarse`); empty otherwise.
+    #[serde(default)]
+    pub coarse: Vec<Vec3>,
 }
 
 /// What a run's sinks learn before the first frame: what stays the same over the run.
@@ -43,6 +47,9 @@ pub struct RunHeader<'a> {
     pub rig: Option<tryon_core::stages::Rig<'a>>,
     /// Output frames a second.
     pub fps: Real,
+    /// The coarse cloth's triangles when the output is a refined surface (empty when the output
+    /// is the coarse cloth itself).
+    pub coarse_triangles: &'a [[u32; 3]],
 }
 
 /// Where a run's frames go as they are made (an exporter streaming them to files, or memory).
@@ -58,6 +65,10 @@ pub trait FrameSink {
     }
     /// Whether records should carry the body's positions (a picture of every frame needs them).
     fn wants_body(&self) -> bool {
+        false
+    }
+    /// Whether records should carry the coarse cloth under a refined output surface.
+    fn wants_coarse(&self) -> bool {
         false
     }
     /// The referee's figures of a judged frame, after its record.
@@ -131,6 +142,8 @@ pub struct RunContext {
     pub garment_names: Vec<String>,
     pub triangle_garment: Vec<u16>,
     pub body_triangles: Vec<[u32; 3]>,
+    /// The coarse cloth's triangles under a refined output (empty without refinement).
+    pub coarse_triangles: Vec<[u32; 3]>,
     fold_triangles: Vec<[u32; 3]>,
     start_distances: Baseline,
     refines: bool,
@@ -239,6 +252,10 @@ impl Pipeline {
             garment_names,
             triangle_garment,
             body_triangles,
+            coarse_triangles: match refines {
+                true => self.garment.triangulate().0,
+                false => Vec::new(),
+            },
             fold_triangles,
             start_distances,
             refines,
@@ -269,6 +286,7 @@ impl Pipeline {
             body_triangles: &ctx.body_triangles,
             rig: self.body.rig().filter(|_| ctx.moving),
             fps: self.fps,
+            coarse_triangles: &ctx.coarse_triangles,
         }
     }
 
@@ -281,6 +299,7 @@ impl Pipeline {
             garment: self.output_garment().to_vec(),
             skin_offsets: self.skin_offsets(&*sink, pose0.as_ref()),
             body: self.body_for(&*sink, pose0.as_ref()),
+            coarse: self.coarse_for(&*sink, ctx, &self.cloth.positions),
             pose: pose0,
         });
     }
@@ -345,6 +364,7 @@ impl Pipeline {
                 garment: output.clone(),
                 skin_offsets: self.skin_offsets(&*sink, pose.as_ref()),
                 body: self.body_for(&*sink, pose.as_ref()),
+                coarse: self.coarse_for(&*sink, &ctx, &coarse_x),
                 pose,
             });
             if let Some(f) = state.stats.per_frame.last().filter(|f| f.frame == k) {
@@ -529,6 +549,14 @@ impl Pipeline {
     fn body_for(&self, sink: &dyn FrameSink, pose: Option<&Pose>) -> Vec<Vec3> {
         match sink.wants_body() {
             true => self.body_at(pose),
+            false => Vec::new(),
+        }
+    }
+
+    /// The coarse cloth's positions `x`, when the output is refined and the sink asks for them.
+    fn coarse_for(&self, sink: &dyn FrameSink, ctx: &RunContext, x: &[Vec3]) -> Vec<Vec3> {
+        match sink.wants_coarse() && ctx.refines {
+            true => x.to_vec(),
             false => Vec::new(),
         }
     }

@@ -14,6 +14,7 @@ pub(super) const PC2: &str = "garment.pc2";
 pub(super) const OBJ_DIR: &str = "garment-obj";
 pub(super) const GIF: &str = "run.gif";
 pub(super) const USD: &str = "run.usda";
+pub(super) const VIEW: &str = "view.bin";
 
 impl Outputs {
     /// Writes frame `rec` to the caches the scene asks for (PC2, the OBJ sequence).
@@ -44,6 +45,10 @@ impl Outputs {
         }
         if written.is_ok() && self.config.usd {
             written = self.usd_frame(rec);
+        }
+        if written.is_ok() && self.config.view && self.frames.is_multiple_of(self.config.view_every)
+        {
+            written = self.view_frame(rec);
         }
         if let Err(e) = written {
             self.error = Some(e.into());
@@ -121,6 +126,47 @@ impl Outputs {
             });
         }
         meshes
+    }
+
+    /// Writes frame `rec` into view.bin: the body, the coarse cloth and the garment.
+    fn view_frame(&mut self, rec: &FrameRecord) -> Result<(), tryon_io::CacheError> {
+        if self.view.is_none() {
+            let counts = [rec.body.len(), rec.coarse.len(), rec.garment.len()];
+            let w = tryon_io::ViewWriter::create(&self.dir.join(VIEW), self.view_header(counts))?;
+            self.view = Some((w, counts));
+        }
+        match &mut self.view {
+            Some((w, _)) => w.frame(rec.time, (&rec.body, &rec.coarse, &rec.garment)),
+            None => Ok(()),
+        }
+    }
+
+    /// view.bin's header for meshes of `counts` vertices (body, coarse cloth, garment).
+    pub(super) fn view_header(&self, counts: [usize; 3]) -> tryon_io::ViewHeader {
+        let garments = self.garment_names.len().max(1);
+        tryon_io::ViewHeader {
+            version: 1,
+            name: self.name.clone(),
+            fps: self.fps / self.config.view_every.max(1) as Real,
+            body: tryon_io::ViewMesh {
+                vertices: counts[0],
+                triangles: self.body_triangles.clone(),
+            },
+            coarse: tryon_io::ViewMesh {
+                vertices: counts[1],
+                triangles: match counts[1] {
+                    0 => Vec::new(),
+                    _ => self.coarse_triangles.clone(),
+                },
+            },
+            garment: tryon_io::ViewGarment {
+                vertices: counts[2],
+                triangles: self.garment_triangles.clone(),
+                triangle_garment: self.triangle_garment.clone(),
+                names: self.garment_names.clone(),
+                colours: (0..garments).map(garment_colour).collect(),
+            },
+        }
     }
 
     /// The garment triangles of each garment, in order (all in one when not told apart).

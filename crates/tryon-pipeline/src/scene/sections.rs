@@ -378,6 +378,12 @@ pub struct OutputSection {
     pub usd: bool,
     /// Put the moving body into run.usda too (time-sampled points; a collider in Houdini).
     pub usd_body: bool,
+    /// view.bin: the body, the coarse cloth and the garment every frame, as `tryon view DIR`
+    /// plays them (about 200 kB a frame on the demo).
+    pub view: bool,
+    /// Write every n-th frame into view.bin.
+    #[schemars(range(min = 1, max = 1000))]
+    pub view_every: usize,
 }
 
 impl Default for OutputSection {
@@ -397,6 +403,8 @@ impl Default for OutputSection {
             gif_every: 2,
             usd: false,
             usd_body: true,
+            view: true,
+            view_every: 1,
         }
     }
 }
