@@ -74,6 +74,7 @@ fn stats_without_timings(path: &Path) -> Result<serde_json::Value, String> {
     if let Some(o) = v.as_object_mut() {
         o.remove("stages");
         o.remove("loop_s");
+        o.remove("frame_ms");
     }
     Ok(v)
 }

@@ -31,6 +31,7 @@ fn stats_without_times(dir: &Path) -> serde_json::Value {
     let o = v.as_object_mut().unwrap();
     o.remove("stages");
     o.remove("loop_s");
+    o.remove("frame_ms");
     v
 }
 

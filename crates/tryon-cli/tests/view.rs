@@ -86,6 +86,9 @@ fn the_server_answers_its_routes_and_refuses_the_rest() {
     let (_, run) = get(&url, "/api/run");
     let run: serde_json::Value = serde_json::from_slice(&run).unwrap();
     assert_eq!(run["per_frame"].as_array().unwrap().len(), 40);
+    let ms = run["frame_ms"].as_array().unwrap();
+    assert_eq!(ms.len(), 40, "each judged frame's stage times");
+    assert!(ms[10]["cloth"].as_f64().unwrap() > 0.0, "{}", ms[10]);
     let (_, view) = get(&url, "/api/view.bin");
     assert_eq!(view, std::fs::read(dir.join("view.bin")).unwrap());
     assert!(get(&url, "/../stats.json").0.contains("404"));

@@ -449,6 +449,7 @@ impl Pipeline {
             body_parts: report.body_parts,
             fold_retention: (self.folds).retention(&self.cloth.positions, &ctx.fold_triangles),
         });
+        stats.frame_ms.push(timers.open());
     }
 
     /// The run's statistics once the last frame is made.

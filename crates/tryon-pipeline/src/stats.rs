@@ -161,6 +161,10 @@ pub struct Stats {
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
     pub per_frame: Vec<FrameStats>,
+    /// Each judged frame's wall time per stage (ms), in `per_frame`'s order (the viewer plots
+    /// them). Wall times: unlike `per_frame`, they differ from run to run.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub frame_ms: Vec<std::collections::BTreeMap<String, Real>>,
 }
 
 /// [`Stats`] inside a checkpoint: CBOR (which, like stats.json's JSON, names its fields, so the

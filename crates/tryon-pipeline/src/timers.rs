@@ -41,6 +41,13 @@ impl Timers {
         }
     }
 
+    /// The open frame's time so far per stage (ms, to the microsecond).
+    pub fn open(&self) -> BTreeMap<String, Real> {
+        (self.frame.iter())
+            .map(|(name, ms)| (name.to_string(), (ms * 1e3).round() / 1e3))
+            .collect()
+    }
+
     /// Closes the frame: each stage's time this frame goes into its mean and max.
     pub fn end_frame(&mut self) {
         for (name, ms) in std::mem::take(&mut self.frame) {

@@ -79,7 +79,9 @@ impl RunFiles {
             .and_then(|t| serde_json::from_str(&t).ok())
             .unwrap_or(serde_json::Value::Null);
         let per_frame = stats.get("per_frame").cloned().unwrap_or_default();
-        let run = serde_json::json!({ "stats": stats, "per_frame": per_frame });
+        let frame_ms = stats.get("frame_ms").cloned().unwrap_or_default();
+        let run =
+            serde_json::json!({ "stats": stats, "per_frame": per_frame, "frame_ms": frame_ms });
         Ok(RunFiles {
             view: Bytes::from(view),
             run: Bytes::from(serde_json::to_vec(&run).unwrap_or_default()),

@@ -6,7 +6,7 @@
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { parseView } from './view.js';
-import { drawPlots } from './plots.js';
+import { drawPlots, figuresOf } from './plots.js';
 
 const $ = (id) => document.getElementById(id);
 const state = {
@@ -104,6 +104,7 @@ function softwareGl() {
 
 async function main() {
   const run = await (await fetchOk('/api/run')).json();
+  const figures = figuresOf(run);
   const bytes = await (await fetchOk('/api/view.bin')).arrayBuffer();
   const view = parseView(bytes);
   document.title = `tryon view: ${view.header.name}`;
@@ -188,7 +189,7 @@ async function main() {
     state.time = f.time;
     $('frame').textContent = `frame ${k} / ${view.frames - 1}, ${f.time.toFixed(2)} s`;
     $('timeline').value = k;
-    drawPlots($('plots'), run.per_frame, k, view.frames, seek);
+    drawPlots($('plots'), figures, k, view.frames, seek);
     state.showMs += performance.now() - t0;
   }
   function seek(k) {

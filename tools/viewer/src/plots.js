@@ -13,6 +13,33 @@ const FIGURES = [
 // cursor.
 let cache = null;
 
+/// The run's figures per judged frame: stats.json's `per_frame`, with each stage's ms
+/// (`frame_ms`, in the same order) as `ms:<stage>`.
+export function figuresOf(run) {
+  const ms = run.frame_ms || [];
+  return (run.per_frame || []).map((p, i) => {
+    const f = { ...p };
+    for (const [stage, v] of Object.entries(ms[i] || {})) f[`ms:${stage}`] = v;
+    return f;
+  });
+}
+
+const STAGE_COLOURS = ['#1f77b4', '#ff7f0e', '#2ca02c', '#d62728', '#9467bd', '#8c564b', '#e377c2', '#7f7f7f', '#bcbd22', '#17becf'];
+
+/// One strip per stage that took on average over 0.05 ms a frame, slowest first.
+function stageFigures(perFrame) {
+  const sums = new Map();
+  for (const p of perFrame) {
+    for (const [k, v] of Object.entries(p)) {
+      if (k.startsWith('ms:')) sums.set(k, (sums.get(k) || 0) + v);
+    }
+  }
+  return [...sums.entries()]
+    .filter(([, sum]) => sum / Math.max(perFrame.length, 1) > 0.05)
+    .sort((a, b) => b[1] - a[1])
+    .map(([key], i) => ({ key, label: `${key.slice(3)} (ms)`, scale: 1, colour: STAGE_COLOURS[i % STAGE_COLOURS.length] }));
+}
+
 export function drawPlots(canvas, perFrame, current, frames, seek) {
   const w = canvas.clientWidth;
   if (!cache || cache.width !== w || cache.perFrame !== perFrame) {
@@ -39,7 +66,8 @@ export function drawPlots(canvas, perFrame, current, frames, seek) {
 
 function drawStrips(canvas, w, perFrame, frames) {
   const ctx = canvas.getContext('2d');
-  const figures = FIGURES.filter((f) => perFrame.some((p) => typeof p[f.key] === 'number'));
+  const figures = FIGURES.filter((f) => perFrame.some((p) => typeof p[f.key] === 'number'))
+    .concat(stageFigures(perFrame));
   const strip = 46;
   canvas.width = w;
   canvas.height = Math.max(strip * figures.length, 1);
