@@ -160,27 +160,8 @@ pub(crate) enum Command {
     Batch {
         /// The manifest (TOML): `[[job]]` entries and `[[cross]]` products of values.
         manifest: PathBuf,
-        /// Run only the I-th of N disjoint parts (0 <= I < N; job k is in part k mod N), so one
-        /// manifest spreads over machines (a Slurm array task or a Kubernetes job index as I).
-        #[arg(long, value_name = "I/N", value_parser = crate::batch::manifest::shard_arg)]
-        shard: Option<(usize, usize)>,
-        /// Jobs at a time (default: one per core).
-        #[arg(long, short, value_parser = clap::value_parser!(u32).range(1..=1024))]
-        jobs: Option<u32>,
-        /// Threads each job's solver uses (default: cores / jobs, and every core for the last jobs
-        /// to start, which end the batch alone).
-        #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
-        threads: Option<u32>,
-        /// List the jobs (of this part) and whether each is done, without running anything.
-        #[arg(long, conflicts_with = "summary")]
-        list: bool,
-        /// Only write (and print) summary.md and summary.csv from the jobs' folders as they
-        /// are, running nothing: after the parts of a sharded batch have ended.
-        #[arg(long)]
-        summary: bool,
-        /// No progress lines or summary table.
-        #[arg(long, short)]
-        quiet: bool,
+        #[command(flatten)]
+        flags: crate::batch::BatchFlags,
     },
     /// Watch a finished run in the browser: serves the run's folder on 127.0.0.1 and prints the
     /// page's address (play, scrub, toggle body, garment and coarse cloth, colour by stretch,

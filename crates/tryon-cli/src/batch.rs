@@ -18,12 +18,28 @@ use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 /// How a batch is run (`tryon batch` flags).
+#[derive(clap::Args, Debug)]
 pub(crate) struct BatchFlags {
+    /// Run only the I-th of N disjoint parts (0 <= I < N; job k is in part k mod N), so one
+    /// manifest spreads over machines (a Slurm array task or a Kubernetes job index as I).
+    #[arg(long, value_name = "I/N", value_parser = crate::batch::manifest::shard_arg)]
     pub shard: Option<(usize, usize)>,
+    /// Jobs at a time (default: one per core).
+    #[arg(long, short, value_parser = clap::value_parser!(u32).range(1..=1024))]
     pub jobs: Option<u32>,
+    /// Threads each job's solver uses (default: cores / jobs, and every core for the last jobs
+    /// to start, which end the batch alone).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
     pub threads: Option<u32>,
+    /// List the jobs (of this part) and whether each is done, without running anything.
+    #[arg(long, conflicts_with = "summary")]
     pub list: bool,
+    /// Only write (and print) summary.md and summary.csv from the jobs' folders as they
+    /// are, running nothing: after the parts of a sharded batch have ended.
+    #[arg(long)]
     pub summary: bool,
+    /// No progress lines or summary table.
+    #[arg(long, short)]
     pub quiet: bool,
 }
 

@@ -168,25 +168,7 @@ fn main() -> ExitCode {
                 run_scene(s, (Some(&scene), &sets), &out, &flags)
             })
         }
-        Command::Batch {
-            manifest,
-            shard,
-            jobs,
-            threads,
-            list,
-            summary,
-            quiet,
-        } => batch::run(
-            &manifest,
-            &batch::BatchFlags {
-                shard,
-                jobs,
-                threads,
-                list,
-                summary,
-                quiet,
-            },
-        ),
+        Command::Batch { manifest, flags } => batch::run(&manifest, &flags),
         Command::View { dir, port } => view(&dir, port),
         Command::Inspect { file } => tryon_io::inspect::summarize(&file)
             .map(|text| {

@@ -112,23 +112,12 @@ impl Pc2Writer {
     /// the samples the state counts).
     pub fn resume(path: &Path, state: &Pc2State) -> Result<Self, CacheError> {
         let part = part_path(path);
-        let mut f = OpenOptions::new()
-            .write(true)
-            .open(&part)
-            .map_err(io(&part))?;
         let len = HEADER + state.samples as u64 * state.points as u64 * 12;
-        if f.metadata().map_err(io(&part))?.len() < len {
-            return Err(CacheError::Invalid {
-                path: part,
-                what: "shorter than at the checkpoint".into(),
-            });
-        }
-        f.set_len(len).map_err(io(&part))?;
-        f.seek(SeekFrom::End(0)).map_err(io(&part))?;
+        let out = reopen_part(&part, len)?;
         Ok(Pc2Writer {
             path: path.to_path_buf(),
             part,
-            out: BufWriter::new(f),
+            out,
             points: state.points,
             samples: state.samples,
         })
@@ -150,6 +139,24 @@ impl Pc2Writer {
         f.sync_all().map_err(io(&part))?;
         std::fs::rename(&part, &path).map_err(io(&path))
     }
+}
+
+/// A part file written up to a checkpoint, reopened to go on writing after its first `len`
+/// bytes (what came after the checkpoint is cut off); refused when it is shorter than that.
+pub(crate) fn reopen_part(part: &Path, len: u64) -> Result<BufWriter<File>, CacheError> {
+    let mut f = OpenOptions::new()
+        .write(true)
+        .open(part)
+        .map_err(io(part))?;
+    if f.metadata().map_err(io(part))?.len() < len {
+        return Err(CacheError::Invalid {
+            path: part.to_path_buf(),
+            what: "shorter than at the checkpoint".into(),
+        });
+    }
+    f.set_len(len).map_err(io(part))?;
+    f.seek(SeekFrom::End(0)).map_err(io(part))?;
+    Ok(BufWriter::new(f))
 }
 
 fn part_path(path: &Path) -> PathBuf {

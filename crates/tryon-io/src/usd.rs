@@ -11,8 +11,8 @@
 
 use crate::atomic::write_atomic_with;
 use crate::cache::CacheError;
-use std::fs::{File, OpenOptions};
-use std::io::{BufWriter, Seek, SeekFrom, Write};
+use std::fs::File;
+use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use tryon_core::math::Vec3;
 
@@ -142,19 +142,8 @@ impl UsdWriter {
         let mut spools = Vec::with_capacity(meshes.len());
         for (k, &len) in state.spooled.iter().enumerate() {
             let part = spool_path(path, k);
-            let mut f = OpenOptions::new()
-                .write(true)
-                .open(&part)
-                .map_err(io(&part))?;
-            if f.metadata().map_err(io(&part))?.len() < len {
-                return Err(CacheError::Invalid {
-                    path: part,
-                    what: "shorter than at the checkpoint".into(),
-                });
-            }
-            f.set_len(len).map_err(io(&part))?;
-            f.seek(SeekFrom::End(0)).map_err(io(&part))?;
-            spools.push((part, BufWriter::new(f), len));
+            let out = crate::cache::reopen_part(&part, len)?;
+            spools.push((part, out, len));
         }
         Ok(Self::new(path, fps, meshes, spools, state.samples))
     }

@@ -9,8 +9,8 @@
 
 use crate::cache::CacheError;
 use serde::{Deserialize, Serialize};
-use std::fs::{File, OpenOptions};
-use std::io::{BufWriter, Read, Seek, SeekFrom, Write};
+use std::fs::File;
+use std::io::{BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
 use tryon_core::math::Vec3;
 
@@ -132,23 +132,12 @@ impl ViewWriter {
     /// A writer of the view at `path` (made with `header`) going on after `frames` frames.
     pub fn resume(path: &Path, header: ViewHeader, frames: u64) -> Result<Self, CacheError> {
         let part = part_path(path);
-        let mut f = OpenOptions::new()
-            .write(true)
-            .open(&part)
-            .map_err(io(&part))?;
         let len = header.bytes().len() as u64 + frames * 4 * header.frame_floats() as u64;
-        if f.metadata().map_err(io(&part))?.len() < len {
-            return Err(CacheError::Invalid {
-                path: part,
-                what: "shorter than at the checkpoint".into(),
-            });
-        }
-        f.set_len(len).map_err(io(&part))?;
-        f.seek(SeekFrom::End(0)).map_err(io(&part))?;
+        let out = crate::cache::reopen_part(&part, len)?;
         Ok(ViewWriter {
             path: path.to_path_buf(),
             part,
-            out: BufWriter::new(f),
+            out,
             header,
             frames,
         })
