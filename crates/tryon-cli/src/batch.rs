@@ -433,11 +433,8 @@ impl Progress {
         let stale = (self.last_line.as_ref())
             .is_none_or(|(c, at)| *c != counts || at.elapsed() > Duration::from_secs(60));
         if stale {
-            eprintln!(
-                "batch: {}/{} {line}",
-                self.done + self.failed + self.skipped,
-                self.total
-            );
+            let ended = self.done + self.failed + self.skipped;
+            eprintln!("batch: {ended} of {} jobs ended: {line}", self.total);
             self.last_line = Some((counts, Instant::now()));
         }
     }

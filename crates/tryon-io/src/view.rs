@@ -181,8 +181,23 @@ pub fn read_view_header(path: &Path) -> Result<(ViewHeader, u64), CacheError> {
     f.read_exact(&mut json).map_err(io(path))?;
     let header: ViewHeader =
         serde_json::from_slice(&json).map_err(|e| bad(format!("its header: {e}")))?;
-    let frame = 4 * header.frame_floats() as u64;
     let body = total - 12 - n;
+    // A frame's bytes, from counts a damaged or hostile header may make huge: checked, and at
+    // most the file's length.
+    let counts = [
+        header.body.vertices,
+        header.coarse.vertices,
+        header.garment.vertices,
+    ];
+    let frame = (counts.iter())
+        .try_fold(1u64, |a, &c| a.checked_add((c as u64).checked_mul(3)?))
+        .and_then(|floats| floats.checked_mul(4))
+        .filter(|&f| f <= body.max(4))
+        .ok_or_else(|| {
+            bad(format!(
+                "vertex counts {counts:?}: a frame would not fit in the file"
+            ))
+        })?;
     if !body.is_multiple_of(frame) {
         return Err(bad(format!(
             "{body} bytes of frames are not whole frames of {frame}"

@@ -76,6 +76,13 @@ function smoothNormals(g) {
   g.attributes.normal.needsUpdate = true;
 }
 
+function centreOf(p) {
+  let x = 0, y = 0, z = 0;
+  for (let i = 0; i < p.length; i += 3) { x += p[i]; y += p[i + 1]; z += p[i + 2]; }
+  const n = Math.max(p.length / 3, 1);
+  return new THREE.Vector3(x / n, y / n, z / n);
+}
+
 function uniqueEdges(triangles) {
   const seen = new Set();
   const edges = [];
@@ -157,6 +164,7 @@ async function main() {
   }
   const field = new Float32Array(h.garment.vertices);
   let paintedAs = null;
+  let followFrom = null;
   // The meshes move every frame; they are always in view of a camera framed on the body.
   for (const m of [body, garment, coarse]) m.frustumCulled = false;
 
@@ -184,6 +192,14 @@ async function main() {
       }
       colours.needsUpdate = true;
       paintedAs = state.colour;
+    }
+    // The camera moves with the body's centre (a walk leaves frame 0's view otherwise).
+    if (followFrom && $('follow').checked && f.body.length) {
+      const c = centreOf(f.body);
+      const d = c.clone().sub(followFrom);
+      camera.position.add(d);
+      controls.target.add(d);
+      followFrom = c;
     }
     state.frame = k;
     state.time = f.time;
@@ -214,6 +230,7 @@ async function main() {
   camera.position.copy(centre).add(new THREE.Vector3(0, 0.1 * extent.y, fit));
   controls.target.copy(centre);
   controls.update();
+  followFrom = centreOf(view.frame(0).body);
 
   $('timeline').max = view.frames - 1;
   $('timeline').addEventListener('input', (e) => seek(Number(e.target.value)));
