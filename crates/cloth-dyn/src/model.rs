@@ -116,6 +116,10 @@ pub struct ClothModel {
     /// Area lumped to each particle (m^2), for air drag.
     pub area: Vec<Real>,
     pub handles: Vec<Handle>,
+    /// Particles handed to a path after the model was built ([`ClothModel::take_handle`]: a
+    /// user's grab), the only handles [`ClothModel::release_handle`] lets go.
+    #[serde(default)]
+    pub grabbed: Vec<u32>,
     pub topology: Topology,
     /// Triangulated view of the cloth mesh.
     pub triangles: Vec<[u32; 3]>,
@@ -287,6 +291,7 @@ impl ClothModel {
             inv_mass,
             area,
             handles,
+            grabbed: Vec::new(),
             topology,
             triangles,
             rest_positions: pos.clone(),
@@ -328,15 +333,46 @@ impl ClothModel {
         f
     }
 
-    /// Makes `handle`'s particle kinematic, driven along its path; false (nothing changed) for a
-    /// particle out of range or an empty path.
+    /// Makes `handle`'s particle kinematic, driven along its path. A particle taken before gets
+    /// the new path (a drag moving on). Returns true when the particle was newly taken (the set of
+    /// held particles changed); false, with nothing changed, for a particle out of range, an empty
+    /// path, or a particle already held by the model's own pins, bands or kinematic set.
     pub fn take_handle(&mut self, handle: Handle) -> bool {
         let p = handle.particle as usize;
         if p >= self.particle_count() || handle.path.is_empty() {
             return false;
         }
+        if self.grabbed.contains(&handle.particle) {
+            if let Some(h) = self
+                .handles
+                .iter_mut()
+                .rfind(|h| h.particle == handle.particle)
+            {
+                *h = handle;
+            }
+            return false;
+        }
+        if self.inv_mass[p] == 0.0 {
+            return false;
+        }
         self.inv_mass[p] = 0.0;
+        self.grabbed.push(handle.particle);
         self.handles.push(handle);
+        true
+    }
+
+    /// Lets go of a particle [`ClothModel::take_handle`] took: it answers to forces again from
+    /// where it is. Returns false, with nothing changed, for a particle not taken so.
+    pub fn release_handle(&mut self, particle: u32) -> bool {
+        let Some(k) = self.grabbed.iter().position(|&g| g == particle) else {
+            return false;
+        };
+        self.grabbed.remove(k);
+        if let Some(h) = self.handles.iter().rposition(|h| h.particle == particle) {
+            self.handles.remove(h);
+        }
+        let m = self.mass[particle as usize];
+        self.inv_mass[particle as usize] = if m > 0.0 { 1.0 / m } else { 0.0 };
         true
     }
 
@@ -498,5 +534,41 @@ mod tests {
         };
         let msg = ClothModel::build(&m, &p, vec![]).unwrap_err().to_string();
         assert!(msg.contains("density") && msg.contains("-1"), "{msg}");
+    }
+
+    #[test]
+    fn a_grab_is_taken_moved_on_and_let_go_but_a_pin_is_not() {
+        let m = grid_xz(2, 2, 1.0, 1.0, 0.0);
+        let pin = Handle {
+            particle: 0,
+            path: vec![(0.0, Vec3::zeros())],
+        };
+        let mut model = ClothModel::build(&m, &ClothParams::default(), vec![pin]).unwrap();
+        let free = model.inv_mass[4];
+        assert!(free > 0.0);
+        let at = |x: Real| Handle {
+            particle: 4,
+            path: vec![(0.0, Vec3::new(x, 0.0, 0.0))],
+        };
+        assert!(model.take_handle(at(1.0)));
+        assert_eq!((model.inv_mass[4], model.handles.len()), (0.0, 2));
+        // Moving on replaces the path: still two handles, the new one last.
+        assert!(!model.take_handle(at(2.0)));
+        assert_eq!(model.handles.len(), 2);
+        assert_eq!(model.handles[1].position(0.0), Vec3::new(2.0, 0.0, 0.0));
+        // The pin keeps its particle: neither taken nor let go.
+        assert!(!model.take_handle(Handle {
+            particle: 0,
+            ..at(3.0)
+        }));
+        assert!(!model.release_handle(0));
+        assert_eq!(model.handles[0].particle, 0);
+        assert!(model.release_handle(4));
+        assert_eq!((model.inv_mass[4], model.handles.len()), (free, 1));
+        assert!(!model.release_handle(4));
+        assert!(!model.take_handle(Handle {
+            particle: 99,
+            ..at(0.0)
+        }));
     }
 }

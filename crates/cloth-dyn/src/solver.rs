@@ -153,6 +153,14 @@ impl ClothSim {
         }
     }
 
+    /// Lets go of a particle [`ClothSim::grab`] took: forces move it again from where it is.
+    pub fn release(&mut self, particle: u32) {
+        if self.model.release_handle(particle) {
+            self.free_mass[particle as usize] = self.model.mass[particle as usize];
+            self.tethers_stale = true;
+        }
+    }
+
     /// The substep used when nothing goes wrong (s).
     pub fn nominal_substep(&self) -> Real {
         self.stable_substep
@@ -357,6 +365,10 @@ impl ClothSolver for ClothSim {
 
     fn grab(&mut self, handle: Handle) {
         ClothSim::grab(self, handle)
+    }
+
+    fn release(&mut self, particle: u32) {
+        ClothSim::release(self, particle)
     }
 
     fn step_frame(

@@ -325,6 +325,11 @@ pub trait ClothSolver: Send {
     /// Hands `handle.particle` to a scripted path from now on (a user grabbing the cloth). A
     /// particle it does not have, or an empty path, is ignored.
     fn grab(&mut self, handle: Handle);
+    /// Lets go of a particle [`grab`](Self::grab) took (the user letting go of the cloth): it
+    /// moves freely again from where it is. A particle not grabbed is ignored.
+    fn release(&mut self, particle: u32) {
+        let _ = particle;
+    }
     /// What untangling the starting shape did, once the first step ran (solvers with contact
     /// between layers of cloth; `None` for the others).
     fn untangled(&self) -> Option<Untangled> {

@@ -580,6 +580,12 @@ impl ClothSolver for VbdSim {
             self.tethers_stale = true;
         }
     }
+
+    fn release(&mut self, particle: u32) {
+        if self.model.release_handle(particle) {
+            self.tethers_stale = true;
+        }
+    }
 }
 
 #[cfg(test)]

@@ -339,6 +339,12 @@ impl ClothSolver for XpbdSim {
         }
     }
 
+    fn release(&mut self, particle: u32) {
+        if self.model.release_handle(particle) {
+            self.tethers_stale = true;
+        }
+    }
+
     fn boxed_clone(&self) -> Option<Box<dyn ClothSolver>> {
         Some(Box::new(self.clone()))
     }
