@@ -163,15 +163,25 @@ pub(crate) enum Command {
         #[command(flatten)]
         flags: crate::batch::BatchFlags,
     },
-    /// Watch a finished run in the browser: serves the run's folder on 127.0.0.1 and prints the
-    /// page's address (play, scrub, toggle body, garment and coarse cloth, colour by stretch,
-    /// the per-frame figures). Runs until stopped (Ctrl-C).
+    /// Watch a run in the browser: serves it on 127.0.0.1 and prints the page's address. A run's
+    /// folder plays the finished run (play, scrub, toggle body, garment and coarse cloth, colour
+    /// by stretch, the per-frame figures); a scene file (or `--demo`) runs live, and a press on
+    /// the cloth grabs it and drags it while frames stream in. Runs until stopped (Ctrl-C).
     View {
-        /// A run's output folder (it holds view.bin).
-        dir: PathBuf,
+        /// A run's output folder (it holds view.bin), or a scene file to run live.
+        #[arg(required_unless_present = "demo")]
+        path: Option<PathBuf>,
+        /// Run the embedded default scene live.
+        #[arg(long, conflicts_with = "path")]
+        demo: bool,
+        /// Override a value of a live scene, e.g. `--set effects.wrinkles=true` (repeatable).
+        #[arg(long = "set", value_name = "TABLE.KEY=VALUE")]
+        sets: Vec<String>,
         /// The port (0: any free one).
         #[arg(long, default_value_t = 8737)]
         port: u16,
+        #[command(flatten)]
+        budget: BudgetFlags,
     },
     /// Summarise an asset: OBJ, BVH or MakeHuman file (counts, joints, frames, fps, bounding box,
     /// likely units).

@@ -7,6 +7,7 @@
 
 mod args;
 mod batch;
+mod live;
 mod report;
 mod resume;
 
@@ -169,7 +170,22 @@ fn main() -> ExitCode {
             })
         }
         Command::Batch { manifest, flags } => batch::run(&manifest, &flags),
-        Command::View { dir, port } => view(&dir, port),
+        Command::View {
+            path,
+            demo,
+            sets,
+            port,
+            budget,
+        } => match (path, demo) {
+            (Some(p), _) if p.is_dir() => view(&p, port),
+            (Some(p), _) => load(&p, &sets).and_then(|s| {
+                let pipeline = assemble(s, &p.display().to_string(), false, &budget, None)?;
+                live::serve(pipeline, port)
+            }),
+            (None, _) => demo_scene(&sets).and_then(|s| {
+                live::serve(assemble(s, "the embedded demo", false, &budget, None)?, port)
+            }),
+        },
         Command::Inspect { file } => tryon_io::inspect::summarize(&file)
             .map(|text| {
                 print!("{text}");
@@ -272,12 +288,6 @@ fn main() -> ExitCode {
 
 /// `tryon view DIR`: serves the run until the process is stopped.
 fn view(dir: &Path, port: u16) -> Result<(), Failure> {
-    if dir.is_file() {
-        return Err(Failure::BadInput(format!(
-            "{}: a file; `tryon view` takes a run's output folder (run the scene, then view its folder)",
-            dir.display()
-        )));
-    }
     let files = tryon_view::RunFiles::read(dir).map_err(|e| Failure::BadInput(e.to_string()))?;
     let (name, frames) = (files.name.clone(), files.frames);
     tryon_view::serve(files, port, |addr| {

@@ -57,7 +57,7 @@ fn http(addr: &str, request: &[u8]) -> (String, Vec<u8>) {
 }
 
 fn get(addr: &str, path: &str) -> (String, Vec<u8>) {
-    let req = format!("GET {path} HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n");
+    let req = format!("GET {path} HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n");
     http(addr, req.as_bytes())
 }
 
@@ -95,17 +95,78 @@ fn the_server_answers_its_routes_and_refuses_the_rest() {
     assert!(get(&url, "/api/nothing").0.contains("404"));
     let post = http(
         &url,
-        b"POST /api/run HTTP/1.1\r\nHost: x\r\nContent-Length: 3\r\nConnection: close\r\n\r\nabc",
+        b"POST /api/run HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Length: 3\r\nConnection: close\r\n\r\nabc",
     );
     assert!(post.0.contains("405"), "{}", post.0);
     // Garbage and an oversized header: an error or a closed connection, and the server goes on.
     let _ = http(&url, b"\x00\x01garbage\r\n\r\n");
     let big = format!(
-        "GET / HTTP/1.1\r\nHost: x\r\nX-Big: {}\r\n\r\n",
+        "GET / HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Big: {}\r\n\r\n",
         "a".repeat(1 << 20)
     );
     let _ = http(&url, big.as_bytes());
     assert!(get(&url, "/").0.contains("200"), "still serving");
+    // A page from elsewhere, or a name rebound to loopback, is refused.
+    let foreign = http(
+        &url,
+        b"GET /api/run HTTP/1.1\r\nHost: evil.example\r\nConnection: close\r\n\r\n",
+    );
+    assert!(foreign.0.contains("403"), "{}", foreign.0);
+    let origin = http(
+        &url,
+        b"GET /api/run HTTP/1.1\r\nHost: localhost:1\r\nOrigin: http://evil.example\r\nConnection: close\r\n\r\n",
+    );
+    assert!(origin.0.contains("403"), "{}", origin.0);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Frame `k`'s garment depths (quarter millimetres) in a view.bin whose header says it has them.
+fn depths(bytes: &[u8], k: usize) -> Vec<u8> {
+    let n = u32::from_le_bytes(bytes[8..12].try_into().unwrap()) as usize;
+    let h: serde_json::Value = serde_json::from_slice(&bytes[12..12 + n]).unwrap();
+    assert_eq!(h["depth"], true, "the view carries depths");
+    let count = |m: &str| h[m]["vertices"].as_u64().unwrap() as usize;
+    let garment = count("garment");
+    let floats = 1 + 3 * (count("body") + count("coarse") + garment);
+    let frame = 4 * floats + garment.next_multiple_of(4);
+    let at = 12 + n + k * frame + 4 * floats;
+    bytes[at..at + garment].to_vec()
+}
+
+#[test]
+fn the_view_carries_each_frames_depths_as_the_referee_judged_them() {
+    // Without body collision the dress sinks into the mannequin: depths to see.
+    let dir = std::env::temp_dir().join(format!("tryon-view-depth-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let ok = Command::new(TRYON)
+        .args(["demo", "--quiet", "--frames", "12", "--set"])
+        .arg("effects.body_collision=\"none\"")
+        .arg("--out")
+        .arg(&dir)
+        .status()
+        .unwrap();
+    assert!(ok.success());
+    let bytes = std::fs::read(dir.join("view.bin")).unwrap();
+    let lines = std::fs::read_to_string(dir.join("frames.jsonl")).unwrap();
+    let mut deepest = 0.0f64;
+    for line in lines.lines() {
+        let f: serde_json::Value = serde_json::from_str(line).unwrap();
+        let k = f["frame"].as_u64().unwrap() as usize;
+        let judged = f["max_penetration_m"].as_f64().unwrap();
+        let max = *depths(&bytes, k).iter().max().unwrap() as f64 / 4000.0;
+        // Quarter millimetres, 63.75 mm at most.
+        let want = judged.min(63.75e-3);
+        assert!(
+            (max - want).abs() <= 0.000_125 + 1e-9,
+            "frame {k}: view {max}, stats {judged}"
+        );
+        deepest = deepest.max(judged);
+    }
+    assert!(deepest > 0.005, "the dress sank in ({deepest} m)");
+    assert!(
+        depths(&bytes, 0).iter().all(|&d| d == 0),
+        "frame 0 is not judged"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -2,7 +2,9 @@
 //! garment every frame, in one file the page reads whole (little-endian): `TRYONVW1`, a u32
 //! header length, the header as JSON (padded with spaces to a multiple of 4 bytes), then every
 //! frame at one size: its time (f32), then the body's, the coarse cloth's and the garment's
-//! positions (f32 x, y, z, in the counts the header gives).
+//! positions (f32 x, y, z, in the counts the header gives), then, when the header's `depth` is
+//! set (version 2), one byte per garment vertex, its depth in the body in quarter millimetres
+//! ([`crate::depth_code`]), padded with zeros to a multiple of 4 bytes.
 //!
 //! Frames stream into a hidden part file and the file is renamed into place at the end, so it is
 //! whole or absent; a checkpoint keeps the frames written and a resumed writer cuts back to them.
@@ -43,11 +45,26 @@ pub struct ViewHeader {
     /// The coarse cloth under a refined garment (no vertices when the garment is the coarse cloth).
     pub coarse: ViewMesh,
     pub garment: ViewGarment,
+    /// Whether each frame ends with the garment vertices' depths in the body.
+    #[serde(default)]
+    pub depth: bool,
 }
 
 impl ViewHeader {
     fn frame_floats(&self) -> usize {
         1 + 3 * (self.body.vertices + self.coarse.vertices + self.garment.vertices)
+    }
+
+    /// Bytes of the depths at the end of each frame (0 without them).
+    fn depth_bytes(&self) -> usize {
+        match self.depth {
+            true => self.garment.vertices.next_multiple_of(4),
+            false => 0,
+        }
+    }
+
+    fn frame_bytes(&self) -> usize {
+        4 * self.frame_floats() + self.depth_bytes()
     }
 
     /// The header's bytes as the file holds them (length, JSON, padding).
@@ -95,29 +112,34 @@ impl ViewWriter {
         })
     }
 
-    /// Appends a frame: its time and the body's, coarse cloth's and garment's positions.
+    /// Appends a frame: its time, the body's, coarse cloth's and garment's positions, and (when
+    /// the header says so) the garment's depths (none given: all 0).
     pub fn frame(
         &mut self,
         time: f64,
         (body, coarse, garment): (&[Vec3], &[Vec3], &[Vec3]),
+        depth: &[u8],
     ) -> Result<(), CacheError> {
         let h = &self.header;
         if body.len() != h.body.vertices
             || coarse.len() != h.coarse.vertices
             || garment.len() != h.garment.vertices
+            || !(depth.is_empty() || (h.depth && depth.len() == garment.len()))
         {
             return Err(CacheError::Invalid {
                 path: self.path.clone(),
                 what: "a frame whose vertex counts are not the view's".into(),
             });
         }
-        let mut bytes = Vec::with_capacity(4 * h.frame_floats());
+        let mut bytes = Vec::with_capacity(h.frame_bytes());
         bytes.extend_from_slice(&(time as f32).to_le_bytes());
         for p in body.iter().chain(coarse).chain(garment) {
             for v in [p.x, p.y, p.z] {
                 bytes.extend_from_slice(&(v as f32).to_le_bytes());
             }
         }
+        bytes.extend_from_slice(depth);
+        bytes.resize(h.frame_bytes(), 0);
         self.out.write_all(&bytes).map_err(io(&self.part))?;
         self.frames += 1;
         Ok(())
@@ -132,7 +154,7 @@ impl ViewWriter {
     /// A writer of the view at `path` (made with `header`) going on after `frames` frames.
     pub fn resume(path: &Path, header: ViewHeader, frames: u64) -> Result<Self, CacheError> {
         let part = part_path(path);
-        let len = header.bytes().len() as u64 + frames * 4 * header.frame_floats() as u64;
+        let len = header.bytes().len() as u64 + frames * header.frame_bytes() as u64;
         let out = crate::cache::reopen_part(&part, len)?;
         Ok(ViewWriter {
             path: path.to_path_buf(),
@@ -189,9 +211,13 @@ pub fn read_view_header(path: &Path) -> Result<(ViewHeader, u64), CacheError> {
         header.coarse.vertices,
         header.garment.vertices,
     ];
+    let depth = match header.depth {
+        true => (header.garment.vertices as u64).checked_next_multiple_of(4),
+        false => Some(0),
+    };
     let frame = (counts.iter())
         .try_fold(1u64, |a, &c| a.checked_add((c as u64).checked_mul(3)?))
-        .and_then(|floats| floats.checked_mul(4))
+        .and_then(|floats| floats.checked_mul(4)?.checked_add(depth?))
         .filter(|&f| f <= body.max(4))
         .ok_or_else(|| {
             bad(format!(
@@ -227,6 +253,7 @@ mod tests {
                 names: vec!["dress".into()],
                 colours: vec![[1, 2, 3]],
             },
+            depth: false,
         }
     }
 
@@ -238,12 +265,16 @@ mod tests {
         let body = |k: usize| vec![Vec3::new(k as f64, 1.0, 2.0); 3];
         let garment = |k: usize| vec![Vec3::new(0.5, k as f64, -1.0); 2];
         let write = |w: &mut ViewWriter, k: usize| {
-            w.frame(k as f64 / 30.0, (&body(k), &[], &garment(k)))
+            w.frame(k as f64 / 30.0, (&body(k), &[], &garment(k)), &[])
                 .unwrap()
         };
         let mut w = ViewWriter::create(&a, header()).unwrap();
         (0..5).for_each(|k| write(&mut w, k));
-        assert!(w.frame(0.0, (&body(0), &[], &body(0))).is_err());
+        assert!(w.frame(0.0, (&body(0), &[], &body(0)), &[]).is_err());
+        assert!(
+            w.frame(0.0, (&body(0), &[], &garment(0)), &[1, 2]).is_err(),
+            "no depths in this view"
+        );
         w.finish().unwrap();
         let mut w = ViewWriter::create(&b, header()).unwrap();
         (0..2).for_each(|k| write(&mut w, k));
@@ -269,6 +300,41 @@ mod tests {
         assert!(
             read_view_header(&b).is_err(),
             "a header longer than the file"
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn depths_follow_each_frames_positions_padded_to_four_bytes() {
+        let dir = std::env::temp_dir().join(format!("tryon-view-depth-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("v.bin");
+        let h = ViewHeader {
+            version: 2,
+            depth: true,
+            ..header()
+        };
+        let mut w = ViewWriter::create(&path, h.clone()).unwrap();
+        let body = vec![Vec3::zeros(); 3];
+        let garment = vec![Vec3::new(1.0, 2.0, 3.0); 2];
+        w.frame(0.0, (&body, &[], &garment), &[9, 255]).unwrap();
+        w.frame(0.1, (&body, &[], &garment), &[]).unwrap();
+        assert!(
+            w.frame(0.2, (&body, &[], &garment), &[1]).is_err(),
+            "one depth for two vertices"
+        );
+        w.finish().unwrap();
+        let (back, frames) = read_view_header(&path).unwrap();
+        assert_eq!((back, frames), (h, 2));
+        let bytes = std::fs::read(&path).unwrap();
+        let start = 12 + u32::from_le_bytes(bytes[8..12].try_into().unwrap()) as usize;
+        let floats = 4 * (1 + 3 * 5);
+        assert_eq!(bytes.len(), start + 2 * (floats + 4));
+        assert_eq!(&bytes[start + floats..start + floats + 4], &[9, 255, 0, 0]);
+        assert_eq!(
+            &bytes[start + 2 * floats + 4..],
+            &[0, 0, 0, 0],
+            "no depths given: 0"
         );
         let _ = std::fs::remove_dir_all(&dir);
     }

@@ -6,6 +6,7 @@
 //! and a resumed run's outputs go on from it (`checkpoint`).
 
 mod caches;
+pub use caches::{ViewMeshes, view_header};
 
 use crate::pipeline::Pipeline;
 use crate::run::{FrameRecord, FrameSink, FrameStats, RunHeader, RunOutput, Stats};
@@ -393,6 +394,10 @@ impl FrameSink for Outputs {
 
     fn wants_coarse(&self) -> bool {
         self.config.view
+    }
+
+    fn wants_depth(&self) -> bool {
+        self.config.view && self.config.referee_every > 0
     }
 }
 

@@ -20,6 +20,7 @@ mod garments;
 pub mod hold;
 pub mod kimono;
 pub mod kimono_wear;
+pub mod live;
 pub mod metrics;
 mod object;
 pub mod pipeline;

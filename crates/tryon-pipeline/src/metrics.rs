@@ -56,11 +56,15 @@ pub struct Penetration {
 /// Penetration of `points` into the referee's body, and how many are detached compared with
 /// `start` (see [`crate::hold`]).
 pub fn penetration(referee: &mut ExactCollider, points: &[Vec3], start: &Baseline) -> Penetration {
-    let signed = distances(referee, points);
+    penetration_of(&distances(referee, points), start)
+}
+
+/// [`penetration`] from the points' signed distances to the body.
+pub fn penetration_of(signed: &[Real], start: &Baseline) -> Penetration {
     if signed.is_empty() {
         return Penetration::default();
     }
-    let detached = start.detached_share(&signed);
+    let detached = start.detached_share(signed);
     let mut d: Vec<Real> = signed.iter().map(|s| (-s).max(0.0)).collect();
     d.sort_by(|a, b| a.total_cmp(b));
     let k = ((d.len() as Real * 0.99).ceil() as usize).clamp(1, d.len()) - 1;

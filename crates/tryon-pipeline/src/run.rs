@@ -2,7 +2,7 @@
 //! every stage timed; the result holds every frame's garment and pose for the exporters, and the
 //! statistics written to stats.json.
 
-use crate::metrics::{Baseline, penetration, stretch};
+use crate::metrics::{Baseline, penetration_of, stretch};
 use crate::pipeline::{LoopState, Pipeline, run_surface};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
@@ -30,6 +30,11 @@ pub struct FrameRecord {
     /// them (`wants_coarse`); empty otherwise.
     #[serde(default)]
     pub coarse: Vec<Vec3>,
+    /// Each garment vertex's depth in the body at the last judged frame
+    /// ([`tryon_io::depth_code`]), when the sink asks for them (`wants_depth`) and the referee
+    /// judges; empty otherwise.
+    #[serde(default)]
+    pub depth: Vec<u8>,
 }
 
 /// What a run's sinks learn before the first frame: what stays the same over the run.
@@ -69,6 +74,10 @@ pub trait FrameSink {
     }
     /// Whether records should carry the coarse cloth under a refined output surface.
     fn wants_coarse(&self) -> bool {
+        false
+    }
+    /// Whether records should carry the garment's depths in the body.
+    fn wants_depth(&self) -> bool {
         false
     }
     /// The referee's figures of a judged frame, after its record.
@@ -129,14 +138,18 @@ pub struct RunState {
     pub pending: Option<Pending>,
     /// Wall time of the loop before this session (s).
     pub loop_s: Real,
+    /// The output's depths in the body at the last judged frame ([`FrameRecord::depth`]); not
+    /// kept by a checkpoint (the next judged frame makes them again).
+    #[serde(skip)]
+    pub depth: Vec<u8>,
 }
 
 /// What the loop needs that stays the same over a run (made again when a run resumes).
 #[derive(Debug)]
 pub struct RunContext {
     pub frames: usize,
-    info: tryon_core::stages::ClothInfo,
-    moving: bool,
+    pub(crate) info: tryon_core::stages::ClothInfo,
+    pub(crate) moving: bool,
     every: usize,
     pub garment_triangles: Vec<[u32; 3]>,
     pub garment_names: Vec<String>,
@@ -146,7 +159,7 @@ pub struct RunContext {
     pub coarse_triangles: Vec<[u32; 3]>,
     fold_triangles: Vec<[u32; 3]>,
     start_distances: Baseline,
-    refines: bool,
+    pub(crate) refines: bool,
     pipelined: bool,
 }
 
@@ -271,6 +284,7 @@ impl Pipeline {
             timers: Vec::new(),
             pending: None,
             loop_s: 0.0,
+            depth: Vec::new(),
         };
         (ctx, state)
     }
@@ -300,6 +314,8 @@ impl Pipeline {
             skin_offsets: self.skin_offsets(&*sink, pose0.as_ref()),
             body: self.body_for(&*sink, pose0.as_ref()),
             coarse: self.coarse_for(&*sink, ctx, &self.cloth.positions),
+            // Not judged yet (placing the garment cleared the body).
+            depth: Vec::new(),
             pose: pose0,
         });
     }
@@ -365,6 +381,10 @@ impl Pipeline {
                 skin_offsets: self.skin_offsets(&*sink, pose.as_ref()),
                 body: self.body_for(&*sink, pose.as_ref()),
                 coarse: self.coarse_for(&*sink, &ctx, &coarse_x),
+                depth: match sink.wants_depth() {
+                    true => state.depth.clone(),
+                    false => Vec::new(),
+                },
                 pose,
             });
             if let Some(f) = state.stats.per_frame.last().filter(|f| f.frame == k) {
@@ -409,12 +429,16 @@ impl Pipeline {
             coarse_x
         };
         let referee = &mut self.referee;
+        let depth = &mut state.depth;
         let (pen, (smin, smax, smean), cloth) = timers.time("referee", || {
             if ctx.moving {
                 tryon_core::stages::Collider::update(referee, body_frame);
             }
+            let signed = crate::metrics::distances(referee, output);
+            depth.clear();
+            depth.extend(signed.iter().map(|d| tryon_io::depth_code(-d)));
             (
-                penetration(referee, output, &ctx.start_distances),
+                penetration_of(&signed, &ctx.start_distances),
                 stretch(&ctx.info.edges, &ctx.info.rest, coarse_x),
                 crate::crossings::judge(output, &ctx.garment_triangles),
             )

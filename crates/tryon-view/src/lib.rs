@@ -4,7 +4,12 @@
 //!
 //! Routes: `/` the page, `/viewer.js` its bundle, `/api/run` the run's figures (stats.json, and
 //! its per-frame figures), `/api/view.bin` the frames (view.bin, checked before serving).
-//! Everything else is 404; only GET is answered.
+//! Everything else is 404; only GET is answered. `tryon view SCENE` runs the scene live instead
+//! ([`live`], [`serve_live`]): `/api/live` is then a WebSocket streaming its frames and taking
+//! the page's grabs and drags. Both answer only requests addressed to loopback.
+
+pub mod live;
+pub mod socket;
 
 use axum::Router;
 use axum::body::Bytes;
@@ -91,10 +96,8 @@ impl RunFiles {
     }
 }
 
-/// The server's routes over `files`.
-pub fn router(files: RunFiles) -> Router {
-    let files = Arc::new(files);
-    let (run, view) = (files.clone(), files);
+/// The page and its bundle.
+pub(crate) fn page_routes<S: Clone + Send + Sync + 'static>() -> Router<S> {
     Router::new()
         .route(
             "/",
@@ -104,6 +107,14 @@ pub fn router(files: RunFiles) -> Router {
             "/viewer.js",
             get(|| async { typed("text/javascript; charset=utf-8", VIEWER_JS) }),
         )
+        .fallback(|| async { (StatusCode::NOT_FOUND, "no such page\n") })
+}
+
+/// The server's routes over `files`.
+pub fn router(files: RunFiles) -> Router {
+    let files = Arc::new(files);
+    let (run, view) = (files.clone(), files);
+    page_routes()
         .route(
             "/api/run",
             get(move || async move { typed("application/json", run.run.clone()) }),
@@ -112,16 +123,46 @@ pub fn router(files: RunFiles) -> Router {
             "/api/view.bin",
             get(move || async move { typed("application/octet-stream", view.view.clone()) }),
         )
-        .fallback(|| async { (StatusCode::NOT_FOUND, "no such page\n") })
+        .layer(axum::middleware::from_fn(socket::loopback_only))
 }
 
-fn typed(kind: &'static str, body: impl Into<axum::body::Body>) -> Response {
+pub(crate) fn typed(kind: &'static str, body: impl Into<axum::body::Body>) -> Response {
     ([(header::CONTENT_TYPE, kind)], body.into()).into_response()
 }
 
 /// Serves `files` on 127.0.0.1:`port` (0: any free port) until the process ends; `ready` is
 /// told the address once it listens.
 pub fn serve(files: RunFiles, port: u16, ready: impl FnOnce(SocketAddr)) -> Result<(), ViewError> {
+    serve_router(router(files), port, ready)
+}
+
+/// Runs `sim` live on a thread of its own and serves it on 127.0.0.1:`port` (0: any free port)
+/// until the process ends; `ready` is told the address once it listens.
+pub fn serve_live(
+    sim: Box<dyn live::LiveSim>,
+    port: u16,
+    ready: impl FnOnce(SocketAddr),
+) -> Result<(), ViewError> {
+    let header = sim.header();
+    let name = header.name.clone();
+    let header = serde_json::to_string(&header).unwrap_or_default();
+    let (commands, requests) = std::sync::mpsc::channel();
+    // A few frames of slack: a page slower than the scene skips frames rather than queueing them.
+    let (frames, _) = tokio::sync::broadcast::channel(4);
+    let scene_frames = frames.clone();
+    std::thread::Builder::new()
+        .name("tryon-live".into())
+        .spawn(move || live::run_scene(sim, requests, scene_frames))
+        .map_err(ViewError::Server)?;
+    let hub = Arc::new(live::Hub {
+        commands,
+        frames,
+        header,
+    });
+    serve_router(socket::live_router(hub, name), port, ready)
+}
+
+fn serve_router(app: Router, port: u16, ready: impl FnOnce(SocketAddr)) -> Result<(), ViewError> {
     let rt = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()
@@ -133,8 +174,11 @@ pub fn serve(files: RunFiles, port: u16, ready: impl FnOnce(SocketAddr)) -> Resu
             .map_err(|source| ViewError::Listen { port, source })?;
         let addr = listener.local_addr().map_err(ViewError::Server)?;
         ready(addr);
-        axum::serve(listener, router(files))
-            .await
-            .map_err(ViewError::Server)
+        // Frames go out as soon as they are written (Nagle's wait would hold a frame's tail
+        // for the page's acknowledgement).
+        let listener = axum::serve::ListenerExt::tap_io(listener, |tcp| {
+            let _ = tcp.set_nodelay(true);
+        });
+        axum::serve(listener, app).await.map_err(ViewError::Server)
     })
 }

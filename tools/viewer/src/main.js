@@ -7,6 +7,7 @@ import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { parseView } from './view.js';
 import { drawPlots, figuresOf } from './plots.js';
+import { attachHand, openLive } from './live.js';
 
 const $ = (id) => document.getElementById(id);
 const state = {
@@ -101,6 +102,13 @@ function colourRamp(s, c) {
   c.setHSL((1 - t) * 0.66, 0.85, 0.5);
 }
 
+function depthRamp(quarterMm, c) {
+  // Outside white; inside from yellow (0.25 mm) to red (5 mm and deeper).
+  if (quarterMm === 0) { c.setRGB(0.92, 0.92, 0.9); return; }
+  const t = Math.min(quarterMm / 20, 1);
+  c.setHSL(0.16 * (1 - t), 0.95, 0.5);
+}
+
 function softwareGl() {
   const gl = document.createElement('canvas').getContext('webgl2');
   const info = gl && gl.getExtension('WEBGL_debug_renderer_info');
@@ -111,9 +119,13 @@ function softwareGl() {
 
 async function main() {
   const run = await (await fetchOk('/api/run')).json();
-  const figures = figuresOf(run);
-  const bytes = await (await fetchOk('/api/view.bin')).arrayBuffer();
-  const view = parseView(bytes);
+  // Live (`tryon view SCENE`): frames stream in; else the finished run's view.bin.
+  const live = run.live ? await openLive() : null;
+  state.live = Boolean(live);
+  const figures = live ? live.figures : figuresOf(run);
+  const view = live
+    ? { header: live.header, source: live.source, get frames() { return live.source.frames; }, frame: (k) => live.source.frame(k) }
+    : parseView(await (await fetchOk('/api/view.bin')).arrayBuffer());
   document.title = `tryon view: ${view.header.name}`;
   $('name').textContent = view.header.name;
 
@@ -124,7 +136,11 @@ async function main() {
   state.software = softwareGl();
   const antialias = params.get('aa') !== '0' && !state.software;
   const renderer = new THREE.WebGLRenderer({ canvas: $('scene'), antialias });
-  state.pixelRatio = Number(params.get('pr')) || window.devicePixelRatio;
+  // Live on software GL, the page draws at half resolution from the start: every pixel costs the
+  // CPU the scene runs on, and a drawing in progress holds up the frames coming in (measured:
+  // drag to frame 35 ms at ratio 1, 28 ms at 0.5, median, headless Chromium on 2 cores).
+  const liveSoftware = run.live && state.software;
+  state.pixelRatio = Number(params.get('pr')) || (liveSoftware ? 0.5 : window.devicePixelRatio);
   const adaptive = !params.get('pr');
   renderer.setPixelRatio(state.pixelRatio);
   const scene = new THREE.Scene();
@@ -137,6 +153,9 @@ async function main() {
   const controls = new OrbitControls(camera, renderer.domElement);
 
   const h = view.header;
+  // The grabbed particle, drawn as a small ball.
+  const knob = new THREE.Mesh(new THREE.SphereGeometry(0.012, 12, 8), new THREE.MeshBasicMaterial({ color: 0xffcc00 }));
+  knob.visible = false;
   // The body is closed and faces out: its back faces are never seen. A garment's inside is.
   const body = meshOf(h.body.triangles, h.body.vertices,
     new THREE.MeshLambertMaterial({ color: 0xcdaa96, side: THREE.FrontSide }));
@@ -147,7 +166,7 @@ async function main() {
   const coarse = meshOf(h.coarse.triangles, h.coarse.vertices,
     new THREE.MeshBasicMaterial({ color: 0x203060, wireframe: true }));
   coarse.visible = false;
-  scene.add(body, garment, coarse);
+  scene.add(body, garment, coarse, knob);
   if (h.coarse.vertices === 0) $('show-coarse').disabled = true;
 
   const garmentColours = h.garment.colours.map((c) => new THREE.Color(c[0] / 255, c[1] / 255, c[2] / 255));
@@ -168,6 +187,9 @@ async function main() {
   // The meshes move every frame; they are always in view of a camera framed on the body.
   for (const m of [body, garment, coarse]) m.frustumCulled = false;
 
+  // Whether the picture is out of date (live pages draw only then).
+  let dirty = true;
+  controls.addEventListener('change', () => { dirty = true; });
   state.showMs = 0;
   state.renderMs = 0;
   function show(k) {
@@ -180,13 +202,15 @@ async function main() {
       mesh.geometry.attributes.position.needsUpdate = true;
       if (mesh !== coarse) smoothNormals(mesh.geometry);
     }
-    // Colours change with the frame only when they show stretch.
-    if (state.colour === 'stretch' || paintedAs !== state.colour) {
+    // Colours change with the frame only when they show stretch or depth.
+    const depth = state.colour === 'penetration' && f.depth;
+    if (state.colour === 'stretch' || depth || paintedAs !== state.colour) {
       const colours = garment.geometry.attributes.color;
       const c = new THREE.Color();
       if (state.colour === 'stretch') stretchField(edges, rest, f.garment, field);
       for (let v = 0; v < h.garment.vertices; v++) {
         if (state.colour === 'stretch') colourRamp(field[v], c);
+        else if (depth) depthRamp(depth[v], c);
         else c.copy(garmentColours[vertexGarment[v]] || garmentColours[0]);
         colours.setXYZ(v, c.r, c.g, c.b);
       }
@@ -201,6 +225,14 @@ async function main() {
       controls.target.add(d);
       followFrom = c;
     }
+    const grabbed = f.grabbed ?? -1;
+    knob.visible = grabbed >= 0;
+    if (knob.visible) {
+      const p = h.coarse.vertices ? f.coarse : f.garment;
+      knob.position.fromArray(p, 3 * grabbed);
+      state.grabbedAt = knob.position.toArray();
+    }
+    dirty = true;
     state.frame = k;
     state.time = f.time;
     $('frame').textContent = `frame ${k} / ${view.frames - 1}, ${f.time.toFixed(2)} s`;
@@ -209,6 +241,7 @@ async function main() {
     state.showMs += performance.now() - t0;
   }
   function seek(k) {
+    if (live && state.playing) live.send({ type: 'play', on: false });
     state.playing = false;
     $('play').textContent = 'play';
     show(Math.max(0, Math.min(view.frames - 1, k)));
@@ -237,7 +270,30 @@ async function main() {
   $('play').addEventListener('click', () => {
     state.playing = !state.playing;
     $('play').textContent = state.playing ? 'pause' : 'play';
+    if (live) {
+      live.send({ type: 'play', on: state.playing });
+      if (state.playing) show(view.frames - 1);
+    }
   });
+  if (!view.frame(0).depth) $('colour').querySelector('option[value=penetration]').disabled = true;
+  let liveDue = false;
+  if (live) {
+    const hand = attachHand(THREE, { canvas: renderer.domElement, camera, garment, body, controls, live, state });
+    state.liveFrames = 1;
+    // Frames are only taken here; the next animation frame draws the newest (a page slower than
+    // the scene skips frames instead of falling behind).
+    live.onFrame = (f) => {
+      state.liveFrames += 1;
+      // What each frame took on the server (ms), for tests and the console.
+      state.sceneMs = (state.sceneMs || []).slice(-599).concat([f.ms]);
+      hand.frame(f);
+      liveDue = true;
+    };
+    live.onAnswer = (m) => {
+      if (m.type === 'error') { state.answers = (state.answers || []).concat([m.message]); $('status').textContent = m.message; }
+      if (m.type === 'grabbed') $('status').textContent = `holding particle ${m.particle}`;
+    };
+  }
   $('speed').addEventListener('change', (e) => { state.speed = Number(e.target.value); });
   $('colour').addEventListener('change', (e) => { state.colour = e.target.value; show(state.frame); });
   for (const [id, mesh] of [['show-body', body], ['show-garment', garment], ['show-coarse', coarse]]) {
@@ -249,6 +305,7 @@ async function main() {
     const w = canvas.clientWidth, hgt = canvas.clientHeight;
     const r = renderer.getPixelRatio();
     if (canvas.width !== Math.floor(w * r) || canvas.height !== Math.floor(hgt * r)) {
+      dirty = true;
       renderer.setSize(w, hgt, false);
       camera.aspect = w / Math.max(hgt, 1);
       camera.updateProjectionMatrix();
@@ -267,11 +324,32 @@ async function main() {
     }
     window0 = [now, 0];
   }
+  // Live pages draw on demand, so frames a second say nothing: a picture that takes over 8 ms
+  // on average over 30 (software GL) lowers the pixel ratio, down to half, to keep the page's
+  // thread free for the scene's frames.
+  let liveWindow = [0, 0];
+  function adaptLive(ms) {
+    if (!adaptive) return;
+    liveWindow = [liveWindow[0] + ms, liveWindow[1] + 1];
+    if (liveWindow[1] < 30) return;
+    if (liveWindow[0] / liveWindow[1] > 8 && state.pixelRatio > 0.5) {
+      state.pixelRatio = Math.max(0.5, state.pixelRatio - 0.25);
+      renderer.setPixelRatio(state.pixelRatio);
+    }
+    liveWindow = [0, 0];
+  }
   function tick(now) {
     // requestAnimationFrame's time can be earlier than the clock read when the loop started.
     const dt = Math.max(0, (now - clock) / 1000);
     clock = Math.max(clock, now);
-    if (state.playing && view.frames > 1) {
+    if (live) {
+      if (liveDue) {
+        liveDue = false;
+        $('timeline').max = view.frames - 1;
+        if (state.playing) show(view.frames - 1);
+      }
+      playhead = state.frame;
+    } else if (state.playing && view.frames > 1) {
       playhead = (playhead + dt * h.fps * state.speed) % view.frames;
       const k = Math.floor(playhead);
       if (k !== state.frame) show(k);
@@ -280,15 +358,25 @@ async function main() {
     }
     resize();
     controls.update();
+    // Live, a picture is drawn only when something changed (a frame came, the camera moved, a
+    // toggle): the page's thread is then free to take the scene's frames as they come.
+    if (live && !dirty) {
+      requestAnimationFrame(tick);
+      return;
+    }
+    dirty = false;
     const r0 = performance.now();
     renderer.render(scene, camera);
     state.renderMs += performance.now() - r0;
     state.framesDrawn += 1;
-    adapt(performance.now());
+    if (!live) adapt(performance.now());
+    else adaptLive(performance.now() - r0);
     requestAnimationFrame(tick);
   }
   requestAnimationFrame(tick);
-  $('status').textContent = `${view.frames} frames at ${h.fps} fps; ${h.garment.vertices} garment vertices`;
+  $('status').textContent = live
+    ? `live at ${h.fps} fps; ${h.garment.vertices} garment vertices; press on the cloth to drag it`
+    : `${view.frames} frames at ${h.fps} fps; ${h.garment.vertices} garment vertices`;
   state.ready = true;
 }
 

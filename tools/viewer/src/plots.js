@@ -42,9 +42,11 @@ function stageFigures(perFrame) {
 
 export function drawPlots(canvas, perFrame, current, frames, seek) {
   const w = canvas.clientWidth;
-  if (!cache || cache.width !== w || cache.perFrame !== perFrame) {
+  // A live run's figures grow in place: their count is part of the key.
+  if (!cache || cache.width !== w || cache.perFrame !== perFrame || cache.count !== perFrame.length) {
     cache = document.createElement('canvas');
     cache.perFrame = perFrame;
+    cache.count = perFrame.length;
     drawStrips(cache, w, perFrame, frames);
   }
   if (canvas.width !== cache.width) canvas.width = cache.width;

@@ -1,6 +1,7 @@
 // Drives the `tryon view` page in headless Chromium (Debian's, /usr/bin/chromium) with
 // playwright-core: loads it, measures the frames it draws a second while playing, scrubs the
-// timeline to a frame, switches the colour to stretch, and screenshots each state. Prints one
+// timeline to a frame, switches the colour to stretch and then to depth in the body, and
+// screenshots each state. Prints one
 // JSON object (what it measured, the console's errors) for the Rust test to judge; the
 // screenshots go into OUTDIR.
 //   node test/browser.mjs URL OUTDIR
@@ -51,6 +52,10 @@ try {
   await page.selectOption('#colour', 'stretch');
   await page.waitForTimeout(300);
   await page.locator('#scene').screenshot({ path: `${out}/stretch-middle.png` });
+  result.penetration_enabled = await page.evaluate(() => !document.querySelector('#colour option[value=penetration]').disabled);
+  await page.selectOption('#colour', 'penetration');
+  await page.waitForTimeout(300);
+  await page.locator('#scene').screenshot({ path: `${out}/penetration-middle.png` });
   await page.screenshot({ path: `${out}/page.png` });
 } catch (e) {
   result.errors.push(`driver: ${e}`);

@@ -136,37 +136,24 @@ impl Outputs {
             self.view = Some((w, counts));
         }
         match &mut self.view {
-            Some((w, _)) => w.frame(rec.time, (&rec.body, &rec.coarse, &rec.garment)),
+            Some((w, _)) => w.frame(rec.time, (&rec.body, &rec.coarse, &rec.garment), &rec.depth),
             None => Ok(()),
         }
     }
 
     /// view.bin's header for meshes of `counts` vertices (body, coarse cloth, garment).
     pub(super) fn view_header(&self, counts: [usize; 3]) -> tryon_io::ViewHeader {
-        let garments = self.garment_names.len().max(1);
-        tryon_io::ViewHeader {
-            version: 1,
-            name: self.name.clone(),
-            fps: self.fps / self.config.view_every.max(1) as Real,
-            body: tryon_io::ViewMesh {
-                vertices: counts[0],
-                triangles: self.body_triangles.clone(),
-            },
-            coarse: tryon_io::ViewMesh {
-                vertices: counts[1],
-                triangles: match counts[1] {
-                    0 => Vec::new(),
-                    _ => self.coarse_triangles.clone(),
-                },
-            },
-            garment: tryon_io::ViewGarment {
-                vertices: counts[2],
-                triangles: self.garment_triangles.clone(),
-                triangle_garment: self.triangle_garment.clone(),
-                names: self.garment_names.clone(),
-                colours: (0..garments).map(garment_colour).collect(),
-            },
-        }
+        let fps = self.fps / self.config.view_every.max(1) as Real;
+        let meshes = ViewMeshes {
+            body: &self.body_triangles,
+            coarse: &self.coarse_triangles,
+            garment: &self.garment_triangles,
+            triangle_garment: &self.triangle_garment,
+            names: &self.garment_names,
+        };
+        let mut h = view_header(&self.name, fps, &meshes, counts);
+        h.depth = self.config.referee_every > 0;
+        h
     }
 
     /// The garment triangles of each garment, in order (all in one when not told apart).
@@ -200,4 +187,50 @@ pub(super) fn picture<'a>(
         color: garment_colour(k),
     }));
     meshes
+}
+
+/// The triangles of view.bin's meshes and the garments' names.
+#[derive(Clone, Copy, Debug)]
+pub struct ViewMeshes<'a> {
+    pub body: &'a [[u32; 3]],
+    pub coarse: &'a [[u32; 3]],
+    pub garment: &'a [[u32; 3]],
+    /// The garment of each of `garment`'s triangles.
+    pub triangle_garment: &'a [u16],
+    pub names: &'a [String],
+}
+
+/// view.bin's header (also the live page's) for `meshes` of `counts` vertices (body, coarse
+/// cloth, garment; no coarse triangles when the coarse count is 0), without depths.
+pub fn view_header(
+    name: &str,
+    fps: Real,
+    meshes: &ViewMeshes<'_>,
+    counts: [usize; 3],
+) -> tryon_io::ViewHeader {
+    let garments = meshes.names.len().max(1);
+    tryon_io::ViewHeader {
+        version: 2,
+        depth: false,
+        name: name.to_string(),
+        fps,
+        body: tryon_io::ViewMesh {
+            vertices: counts[0],
+            triangles: meshes.body.to_vec(),
+        },
+        coarse: tryon_io::ViewMesh {
+            vertices: counts[1],
+            triangles: match counts[1] {
+                0 => Vec::new(),
+                _ => meshes.coarse.to_vec(),
+            },
+        },
+        garment: tryon_io::ViewGarment {
+            vertices: counts[2],
+            triangles: meshes.garment.to_vec(),
+            triangle_garment: meshes.triangle_garment.to_vec(),
+            names: meshes.names.to_vec(),
+            colours: (0..garments).map(garment_colour).collect(),
+        },
+    }
 }

@@ -1,0 +1,215 @@
+//! Live steering (`tryon view SCENE`): a scene runs on its own thread at its frame rate while the
+//! page watches and pulls the cloth (P4's drag) over a WebSocket at `/api/live`.
+//!
+//! The server speaks first: one text message `{"type":"header", "header": <view.bin's header>}`,
+//! then one binary message per frame ([`encode_frame`]). The page sends text messages, each a
+//! JSON object of at most [`MAX_MESSAGE`] bytes ([`Request`]): `grab` a point on the cloth, `drag`
+//! it to a target, `release` it, `play` or pause. A message the server cannot take gets
+//! `{"type":"error","message":...}` naming what was wrong; nothing the page sends stops the
+//! server. A drag wakes the scene's thread: the next frame starts once half a frame's time has
+//! passed since the last one began, not a whole frame, so a drag shows within about half a
+//! frame plus one frame's work.
+
+use axum::body::Bytes;
+use serde::Deserialize;
+use std::sync::mpsc::{Receiver, RecvTimeoutError, Sender};
+use std::time::{Duration, Instant};
+use tokio::sync::broadcast;
+use tryon_core::math::{Real, Vec3};
+use tryon_io::{LiveFrame, ViewHeader, encode_frame};
+
+/// The largest message the page may send (bytes); larger ones get an error message. Messages
+/// over [`MAX_FRAME`] close the connection (the WebSocket layer will not read them).
+pub const MAX_MESSAGE: usize = 4096;
+/// The largest WebSocket message read at all.
+pub const MAX_FRAME: usize = 64 * 1024;
+/// Farthest a coordinate the page sends may lie from the origin (m).
+const MAX_COORDINATE: Real = 1000.0;
+
+/// A scene running live, as the server drives it: one frame at a time, and the user's hand.
+pub trait LiveSim: Send + 'static {
+    /// What stays the same: the meshes' topology, the name, the frame rate.
+    fn header(&self) -> ViewHeader;
+    /// Makes the next frame.
+    fn step(&mut self) -> LiveFrame;
+    /// Work on the frame just sent that may wait for it (judging it for the next frame's
+    /// figures).
+    fn after_frame(&mut self) {}
+    /// Takes the cloth particle nearest `point` into the user's hand; its number, or why none.
+    fn grab(&mut self, point: Vec3) -> Result<u32, String>;
+    /// Moves the hand's target (it is reached over the next frame).
+    fn drag(&mut self, target: Vec3);
+    /// Lets go.
+    fn release(&mut self);
+}
+
+/// What the page may ask.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+pub enum Request {
+    /// Take the cloth at `point` (m, the scene's frame); `seq` is echoed as the frame's ack.
+    Grab { point: [Real; 3], seq: u32 },
+    /// Move the hand to `target`.
+    Drag { target: [Real; 3], seq: u32 },
+    /// Let go.
+    Release { seq: u32 },
+    /// Run (`on`: true) or pause the scene.
+    Play { on: bool },
+}
+
+impl Request {
+    /// Reads one message of the page, or says what is wrong with it.
+    pub fn parse(text: &str) -> Result<Request, String> {
+        if text.len() > MAX_MESSAGE {
+            return Err(format!(
+                "message of {} bytes; at most {MAX_MESSAGE} are taken",
+                text.len()
+            ));
+        }
+        let r: Request = serde_json::from_str(text).map_err(|e| format!("bad message: {e}"))?;
+        let (key, p) = match &r {
+            Request::Grab { point, .. } => ("point", point),
+            Request::Drag { target, .. } => ("target", target),
+            _ => return Ok(r),
+        };
+        if p.iter().any(|c| !c.is_finite() || c.abs() > MAX_COORDINATE) {
+            return Err(format!(
+                "`{key}` {p:?}: each coordinate must be finite and within {MAX_COORDINATE} m"
+            ));
+        }
+        Ok(r)
+    }
+
+    fn seq(&self) -> Option<u32> {
+        match self {
+            Request::Grab { seq, .. } | Request::Drag { seq, .. } | Request::Release { seq } => {
+                Some(*seq)
+            }
+            Request::Play { .. } => None,
+        }
+    }
+}
+
+/// A request on its way to the scene's thread, with where its answer goes.
+#[derive(Debug)]
+pub struct Command {
+    pub request: Request,
+    pub reply: tokio::sync::mpsc::UnboundedSender<String>,
+}
+
+/// The scene thread's flags between frames.
+#[derive(Debug)]
+struct Steering {
+    playing: bool,
+    /// A drag came since the last frame: the next one is made sooner.
+    urgent: bool,
+    /// The last request's `seq` applied.
+    ack: u32,
+}
+
+impl Steering {
+    fn apply(&mut self, sim: &mut dyn LiveSim, c: Command) {
+        if let Some(s) = c.request.seq() {
+            self.ack = s;
+        }
+        match c.request {
+            Request::Grab { point, seq } => {
+                let answer = match sim.grab(Vec3::from(point)) {
+                    Ok(p) => serde_json::json!({"type": "grabbed", "seq": seq, "particle": p}),
+                    Err(m) => serde_json::json!({"type": "error", "seq": seq, "message": m}),
+                };
+                let _ = c.reply.send(answer.to_string());
+                self.urgent = true;
+            }
+            Request::Drag { target, .. } => {
+                sim.drag(Vec3::from(target));
+                self.urgent = true;
+            }
+            Request::Release { .. } => sim.release(),
+            Request::Play { on } => self.playing = on,
+        }
+    }
+}
+
+/// The scene's thread: makes a frame every 1/fps s while playing (sooner after a drag), hands
+/// each to `frames`, and applies the page's requests between frames. Returns when every sender
+/// of `commands` is gone.
+pub fn run_scene(
+    mut sim: Box<dyn LiveSim>,
+    commands: Receiver<Command>,
+    frames: broadcast::Sender<Bytes>,
+) {
+    let fps = sim.header().fps;
+    let period = Duration::from_secs_f64(1.0 / if fps > 0.0 { fps } else { 30.0 });
+    let mut last = Instant::now() - period;
+    let mut st = Steering {
+        playing: true,
+        urgent: false,
+        ack: 0,
+    };
+    loop {
+        while let Ok(c) = commands.try_recv() {
+            st.apply(sim.as_mut(), c);
+        }
+        let now = Instant::now();
+        let due = last + if st.urgent { period / 2 } else { period };
+        if st.playing && now >= due {
+            last = now;
+            st.urgent = false;
+            let f = sim.step();
+            // No one watching is not an error.
+            let _ = frames.send(Bytes::from(encode_frame(&f, st.ack)));
+            sim.after_frame();
+            continue;
+        }
+        let wait = match st.playing {
+            true => due - now,
+            false => Duration::from_secs(3600),
+        };
+        match commands.recv_timeout(wait) {
+            Ok(c) => st.apply(sim.as_mut(), c),
+            Err(RecvTimeoutError::Timeout) => {}
+            Err(RecvTimeoutError::Disconnected) => return,
+        }
+    }
+}
+
+/// Where the sockets reach the scene: its requests' channel, its frames, its header.
+#[derive(Debug)]
+pub struct Hub {
+    pub commands: Sender<Command>,
+    pub frames: broadcast::Sender<Bytes>,
+    pub header: String,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn requests_are_read_and_bad_ones_named() {
+        assert_eq!(
+            Request::parse(r#"{"type":"drag","target":[0.1,1.2,0.3],"seq":7}"#),
+            Ok(Request::Drag {
+                target: [0.1, 1.2, 0.3],
+                seq: 7
+            })
+        );
+        assert_eq!(
+            Request::parse(r#"{"type":"play","on":false}"#),
+            Ok(Request::Play { on: false })
+        );
+        let bad = |t: &str| Request::parse(t).unwrap_err();
+        assert!(bad("not json").contains("bad message"));
+        assert!(bad(r#"{"type":"jump"}"#).contains("unknown variant `jump`"));
+        assert!(bad(r#"{"type":"drag","target":[1,2],"seq":1}"#).contains("bad message"));
+        assert!(bad(r#"{"type":"drag","target":[1,2,3],"seq":-1}"#).contains("bad message"));
+        assert!(bad(r#"{"type":"release","seq":1,"extra":1}"#).contains("unknown field"));
+        assert!(bad(r#"{"type":"grab","point":[1e9,0,0],"seq":1}"#).contains("`point`"));
+        let long = format!(
+            r#"{{"type":"release","seq":1,"pad":"{}"}}"#,
+            "x".repeat(5000)
+        );
+        assert!(bad(&long).contains("at most 4096"));
+    }
+}
