@@ -172,19 +172,32 @@ fn main() -> ExitCode {
         Command::Batch { manifest, flags } => batch::run(&manifest, &flags),
         Command::View {
             path,
-            demo,
+            demo: _,
             sets,
             port,
             budget,
-        } => match (path, demo) {
-            (Some(p), _) if p.is_dir() => view(&p, port),
-            (Some(p), _) => load(&p, &sets).and_then(|s| {
-                let pipeline = assemble(s, &p.display().to_string(), false, &budget, None)?;
-                live::serve(pipeline, port)
-            }),
-            (None, _) => demo_scene(&sets).and_then(|s| {
-                live::serve(assemble(s, "the embedded demo", false, &budget, None)?, port)
-            }),
+        } => match path {
+            Some(p) if p.is_dir() => view(&p, port),
+            Some(p) => std::fs::read_to_string(&p)
+                .map_err(|e| Failure::BadInput(format!("{}: {e}", p.display())))
+                .and_then(|text| {
+                    let source = live::Source {
+                        text,
+                        file: p,
+                        from_file: true,
+                        sets,
+                    };
+                    live::serve(source, &budget, port)
+                }),
+            None => {
+                let source = live::Source {
+                    text: tryon_pipeline::DEMO_SCENE.to_string(),
+                    file: PathBuf::from("<embedded demo-dress-walk.toml>"),
+                    from_file: false,
+                    sets,
+                };
+                live::serve(source, &budget, port)
+            }
         },
         Command::Inspect { file } => tryon_io::inspect::summarize(&file)
             .map(|text| {

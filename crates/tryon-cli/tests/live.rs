@@ -1,8 +1,9 @@
 //! `tryon view --demo` live (issue 25, items 2 and 3): the scene streams frames over the
 //! WebSocket, a grab and a drag move the grabbed particle to the hand's target, letting go frees
-//! it, and garbage gets error messages without stopping the scene; in headless Chromium a press
-//! and drag on the garment moves the cloth, with each drag's time to the frame that applied it
-//! written to target/viewer-screenshots/live-latency.json for a person to read.
+//! it, and garbage gets error messages without stopping the scene; a fold line (P3) builds the
+//! scene again with the fold; in headless Chromium a line drawn on the garment does the same, and
+//! a press and drag on the garment moves the cloth, with each drag's time to the frame that
+//! applied it written to target/viewer-screenshots/live-latency.json for a person to read.
 
 use std::io::{BufRead, BufReader};
 use std::net::TcpStream;
@@ -326,10 +327,118 @@ fn a_drag_in_chromium_moves_the_cloth_and_its_frames_come_back() {
     });
     eprintln!("live drag to frame: {report}");
     std::fs::write(shots.join("live-latency.json"), report.to_string()).unwrap();
+    // The drawn fold (P3): the scene was built again with it and the page started over on
+    // meshes the line subdivided.
+    let fold = &r["fold"];
+    assert!(
+        fold["after"].as_u64().unwrap() > fold["before"].as_u64().unwrap(),
+        "a fold drawn in the page: {fold} ({})",
+        r["fold_status"]
+    );
     let garbage = r["garbage"]["answers"].as_array().unwrap();
     assert_eq!(garbage.len(), 7, "one error per bad message: {garbage:?}");
     assert!(
         r["frames_after_garbage"].as_u64().unwrap() > 10,
         "the scene goes on"
     );
+}
+
+/// The garment's positions in a frame message.
+fn garment_of(bytes: &[u8], c: &Counts) -> Vec<[f32; 3]> {
+    let f = |k: usize| f32::from_le_bytes(bytes[4 * k..4 * k + 4].try_into().unwrap());
+    let first = 8 + 3 * (c.body + c.coarse);
+    (0..c.garment)
+        .map(|i| [f(first + 3 * i), f(first + 3 * i + 1), f(first + 3 * i + 2)])
+        .collect()
+}
+
+fn counts_of(h: &serde_json::Value) -> Counts {
+    let n = |m: &str| h["header"][m]["vertices"].as_u64().unwrap() as usize;
+    Counts {
+        body: n("body"),
+        coarse: n("coarse"),
+        garment: n("garment"),
+    }
+}
+
+#[test]
+fn a_fold_drawn_live_builds_the_scene_again_with_it() {
+    let (_server, host) = serve_demo();
+    let mut ws = connect(&host);
+    ws.get_mut()
+        .set_read_timeout(Some(Duration::from_secs(300)))
+        .unwrap();
+    let Message::Text(h) = ws.read().unwrap() else {
+        panic!("the header comes first")
+    };
+    let c = counts_of(&serde_json::from_str(h.as_str()).unwrap());
+    let garment = loop {
+        if let Message::Binary(b) = ws.read().unwrap() {
+            break garment_of(&b, &c);
+        }
+    };
+    // A line down the front of the dress: in three bands of its height, the front-most vertex.
+    let (lo, hi) = garment
+        .iter()
+        .fold((f32::MAX, f32::MIN), |(l, h), p| (l.min(p[1]), h.max(p[1])));
+    let line: Vec<[f32; 3]> = [0.35f32, 0.45, 0.55]
+        .iter()
+        .map(|t| {
+            let y = lo + (hi - lo) * t;
+            *garment
+                .iter()
+                .filter(|p| (p[1] - y).abs() < 0.02 && p[0].abs() < 0.05)
+                .max_by(|a, b| a[2].total_cmp(&b[2]))
+                .unwrap()
+        })
+        .collect();
+    let fold = |points: &[[f32; 3]], seq: u32| {
+        serde_json::json!({"type": "fold", "shape": "ridge", "height": 0.015, "points": points, "seq": seq})
+            .to_string()
+    };
+    // Off the garment: the scene's own check says so, and the scene goes on as it was.
+    let far: Vec<[f32; 3]> = line.iter().map(|p| [p[0], p[1], p[2] + 0.5]).collect();
+    ws.send(Message::text(fold(&far, 1))).unwrap();
+    let a = next_answer(&mut ws, &c);
+    assert_eq!(a["type"], "error", "{a}");
+    assert!(
+        a["message"]
+            .as_str()
+            .unwrap()
+            .starts_with("the drawn fold:"),
+        "{a}"
+    );
+    ws.send(Message::text(fold(&line, 2))).unwrap();
+    let (mut folded, mut header) = (false, None);
+    while !(folded && header.is_some()) {
+        match ws.read().unwrap() {
+            Message::Text(t) => {
+                let m: serde_json::Value = serde_json::from_str(t.as_str()).unwrap();
+                match m["type"].as_str() {
+                    Some("folded") => folded = true,
+                    Some("header") => header = Some(counts_of(&m)),
+                    _ => panic!("{m}"),
+                }
+            }
+            _ => continue,
+        }
+    }
+    let c2 = header.unwrap();
+    assert!(
+        c2.coarse > c.coarse,
+        "the line subdivided the cloth: {} -> {}",
+        c.coarse,
+        c2.coarse
+    );
+    // Frames of the new scene follow, at its sizes.
+    let f = loop {
+        if let Message::Binary(b) = ws.read().unwrap() {
+            if b.len()
+                == 32 + 12 * (c2.body + c2.coarse + c2.garment) + c2.garment.next_multiple_of(4)
+            {
+                break frame(&b, &c2);
+            }
+        }
+    };
+    assert!(f.frame >= 1);
 }

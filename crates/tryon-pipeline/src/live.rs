@@ -47,6 +47,8 @@ pub struct Live {
     held: Vec<u32>,
     /// The last frame's depths and deepest point, as [`Live::judge`] gave them.
     judged: (Vec<u8>, Real),
+    /// The output garment as the scene started (where a scene's `[[fold]]` points lie).
+    start: Vec<Vec3>,
 }
 
 impl Live {
@@ -72,6 +74,7 @@ impl Live {
             .bands
             .as_ref()
             .map_or(Vec::new(), |b| b.vertices.clone());
+        let start = pipeline.output_garment().to_vec();
         let timers = Timers::restored(&state.timers, &pipeline.stages());
         let mut live = Live {
             pipeline,
@@ -82,6 +85,7 @@ impl Live {
             header,
             held,
             judged: (Vec::new(), 0.0),
+            start,
         };
         // The first frame's figures are the starting shape's.
         live.judge_last();
@@ -198,6 +202,30 @@ impl Live {
         if let Some(h) = self.hand.take() {
             self.pipeline.solver.release(h.particle);
         }
+    }
+
+    /// Points on the garment as it is now carried to where the same places were when the scene
+    /// started (each by its nearest output vertex, when within [`GRAB_REACH`] of it): a
+    /// line drawn on the moving garment as a scene's `[[fold]] points` take it. A point farther
+    /// from the garment is left where it is, for the scene's own check to name.
+    pub fn to_start(&self, points: &[Vec3]) -> Vec<Vec3> {
+        let now = self.pipeline.output_garment();
+        points
+            .iter()
+            .map(|p| {
+                let nearest = (now.iter().enumerate())
+                    .map(|(k, q)| (k, (q - p).norm()))
+                    .min_by(|a, b| a.1.total_cmp(&b.1));
+                match nearest {
+                    // The vertex's start, and the point's offset from it (small: the point is
+                    // on the surface beside it).
+                    Some((k, d)) if d <= GRAB_REACH => {
+                        self.start.get(k).map_or(*p, |s| s + (p - now[k]))
+                    }
+                    _ => *p,
+                }
+            })
+            .collect()
     }
 
     /// The cloth's coarse particles now.

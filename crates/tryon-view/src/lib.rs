@@ -148,17 +148,16 @@ pub fn serve_live(
     let header = serde_json::to_string(&header).unwrap_or_default();
     let (commands, requests) = std::sync::mpsc::channel();
     // A few frames of slack: a page slower than the scene skips frames rather than queueing them.
-    let (frames, _) = tokio::sync::broadcast::channel(4);
-    let scene_frames = frames.clone();
+    let out = live::Outbox {
+        frames: tokio::sync::broadcast::channel(4).0,
+        header: Arc::new(std::sync::RwLock::new(header)),
+    };
+    let scene_out = out.clone();
     std::thread::Builder::new()
         .name("tryon-live".into())
-        .spawn(move || live::run_scene(sim, requests, scene_frames))
+        .spawn(move || live::run_scene(sim, requests, scene_out))
         .map_err(ViewError::Server)?;
-    let hub = Arc::new(live::Hub {
-        commands,
-        frames,
-        header,
-    });
+    let hub = Arc::new(live::Hub { commands, out });
     serve_router(socket::live_router(hub, name), port, ready)
 }
 

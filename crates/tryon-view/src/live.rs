@@ -4,15 +4,18 @@
 //! The server speaks first: one text message `{"type":"header", "header": <view.bin's header>}`,
 //! then one binary message per frame ([`encode_frame`]). The page sends text messages, each a
 //! JSON object of at most [`MAX_MESSAGE`] bytes ([`Request`]): `grab` a point on the cloth, `drag`
-//! it to a target, `release` it, `play` or pause. A message the server cannot take gets
+//! it to a target, `release` it, `play` or pause, or draw a `fold` (P3's interaction: the scene is
+//! built again with the fold and starts over, and every page gets the new header). A message the server cannot take gets
 //! `{"type":"error","message":...}` naming what was wrong; nothing the page sends stops the
 //! server. A drag wakes the scene's thread: the next frame starts once half a frame's time has
 //! passed since the last one began, not a whole frame, so a drag shows within about half a
 //! frame plus one frame's work.
 
 use axum::body::Bytes;
+use axum::extract::ws::Message;
 use serde::Deserialize;
 use std::sync::mpsc::{Receiver, RecvTimeoutError, Sender};
+use std::sync::{Arc, RwLock};
 use std::time::{Duration, Instant};
 use tokio::sync::broadcast;
 use tryon_core::math::{Real, Vec3};
@@ -41,7 +44,28 @@ pub trait LiveSim: Send + 'static {
     fn drag(&mut self, target: Vec3);
     /// Lets go.
     fn release(&mut self);
+    /// Builds the scene again with a fold drawn along `points` (on the garment as it is now) and
+    /// starts it over; the new header, or what is wrong with the line.
+    fn fold(&mut self, line: &FoldLine) -> Result<ViewHeader, String> {
+        let _ = line;
+        Err("this scene cannot take folds".into())
+    }
 }
+
+/// A fold line the page drew (P3).
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FoldLine {
+    /// `ridge` (out of the garment) or `valley` (into it).
+    pub shape: String,
+    /// How far it stands out or sinks in (m).
+    pub height: Real,
+    /// The line's points on the garment, in order (m).
+    pub points: Vec<[Real; 3]>,
+}
+
+/// Most points a drawn fold line may have.
+pub const MAX_FOLD_POINTS: usize = 64;
 
 /// What the page may ask.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
@@ -55,6 +79,12 @@ pub enum Request {
     Release { seq: u32 },
     /// Run (`on`: true) or pause the scene.
     Play { on: bool },
+    /// Draw a fold and build the scene again with it.
+    Fold {
+        #[serde(flatten)]
+        line: FoldLine,
+        seq: u32,
+    },
 }
 
 impl Request {
@@ -67,12 +97,17 @@ impl Request {
             ));
         }
         let r: Request = serde_json::from_str(text).map_err(|e| format!("bad message: {e}"))?;
-        let (key, p) = match &r {
-            Request::Grab { point, .. } => ("point", point),
-            Request::Drag { target, .. } => ("target", target),
+        let far = |p: &[Real; 3]| p.iter().any(|c| !c.is_finite() || c.abs() > MAX_COORDINATE);
+        let (key, points) = match &r {
+            Request::Grab { point, .. } => ("point", std::slice::from_ref(point)),
+            Request::Drag { target, .. } => ("target", std::slice::from_ref(target)),
+            Request::Fold { line, .. } => {
+                check_fold(line)?;
+                ("points", line.points.as_slice())
+            }
             _ => return Ok(r),
         };
-        if p.iter().any(|c| !c.is_finite() || c.abs() > MAX_COORDINATE) {
+        if let Some(p) = points.iter().find(|p| far(p)) {
             return Err(format!(
                 "`{key}` {p:?}: each coordinate must be finite and within {MAX_COORDINATE} m"
             ));
@@ -82,12 +117,33 @@ impl Request {
 
     fn seq(&self) -> Option<u32> {
         match self {
-            Request::Grab { seq, .. } | Request::Drag { seq, .. } | Request::Release { seq } => {
-                Some(*seq)
-            }
+            Request::Grab { seq, .. }
+            | Request::Drag { seq, .. }
+            | Request::Release { seq }
+            | Request::Fold { seq, .. } => Some(*seq),
             Request::Play { .. } => None,
         }
     }
+}
+
+/// The checks of a drawn fold the scene's own do not make before building it.
+fn check_fold(line: &FoldLine) -> Result<(), String> {
+    if line.shape != "ridge" && line.shape != "valley" {
+        return Err(format!(
+            "fold `shape` {:?}: `ridge` or `valley`",
+            line.shape
+        ));
+    }
+    if !(line.height >= 0.001 && line.height <= 0.1) {
+        return Err(format!("fold `height` {}: 0.001 to 0.1 m", line.height));
+    }
+    let n = line.points.len();
+    if !(2..=MAX_FOLD_POINTS).contains(&n) {
+        return Err(format!(
+            "fold `points`: {n}; 2 to {MAX_FOLD_POINTS} are taken"
+        ));
+    }
+    Ok(())
 }
 
 /// A request on its way to the scene's thread, with where its answer goes.
@@ -108,7 +164,7 @@ struct Steering {
 }
 
 impl Steering {
-    fn apply(&mut self, sim: &mut dyn LiveSim, c: Command) {
+    fn apply(&mut self, sim: &mut dyn LiveSim, c: Command, out: &Outbox) {
         if let Some(s) = c.request.seq() {
             self.ack = s;
         }
@@ -127,18 +183,49 @@ impl Steering {
             }
             Request::Release { .. } => sim.release(),
             Request::Play { on } => self.playing = on,
+            Request::Fold { line, seq } => {
+                let answer = match sim.fold(&line) {
+                    Ok(h) => {
+                        let text = serde_json::to_string(&h).unwrap_or_default();
+                        out.publish_header(text);
+                        serde_json::json!({"type": "folded", "seq": seq})
+                    }
+                    Err(m) => serde_json::json!({"type": "error", "seq": seq, "message": m}),
+                };
+                let _ = c.reply.send(answer.to_string());
+            }
         }
     }
+}
+
+/// Where the scene's output goes: frames (and new headers) to every page, and the header a page
+/// connecting now is sent first.
+#[derive(Clone, Debug)]
+pub struct Outbox {
+    pub frames: broadcast::Sender<Message>,
+    pub header: Arc<RwLock<String>>,
+}
+
+impl Outbox {
+    /// Makes `header` (view.bin's, as JSON) the scene's and tells every page.
+    pub fn publish_header(&self, header: String) {
+        let text = header_message(&header);
+        if let Ok(mut h) = self.header.write() {
+            *h = header;
+        }
+        let _ = self.frames.send(Message::Text(text.into()));
+    }
+}
+
+/// The message that gives a page the scene's header.
+pub fn header_message(header: &str) -> String {
+    format!(r#"{{"type":"header","header":{header}}}"#)
 }
 
 /// The scene's thread: makes a frame every 1/fps s while playing (sooner after a drag), hands
 /// each to `frames`, and applies the page's requests between frames. Returns when every sender
 /// of `commands` is gone.
-pub fn run_scene(
-    mut sim: Box<dyn LiveSim>,
-    commands: Receiver<Command>,
-    frames: broadcast::Sender<Bytes>,
-) {
+pub fn run_scene(mut sim: Box<dyn LiveSim>, commands: Receiver<Command>, out: Outbox) {
     let fps = sim.header().fps;
     let period = Duration::from_secs_f64(1.0 / if fps > 0.0 { fps } else { 30.0 });
     let mut last = Instant::now() - period;
@@ -149,7 +236,7 @@ pub fn run_scene(
     };
     loop {
         while let Ok(c) = commands.try_recv() {
-            st.apply(sim.as_mut(), c);
+            st.apply(sim.as_mut(), c, &out);
         }
         let now = Instant::now();
         let due = last + if st.urgent { period / 2 } else { period };
@@ -158,7 +245,7 @@ pub fn run_scene(
             st.urgent = false;
             let f = sim.step();
             // No one watching is not an error.
-            let _ = frames.send(Bytes::from(encode_frame(&f, st.ack)));
+            let _ = (out.frames).send(Message::Binary(Bytes::from(encode_frame(&f, st.ack))));
             sim.after_frame();
             continue;
         }
@@ -167,19 +254,18 @@ pub fn run_scene(
             false => Duration::from_secs(3600),
         };
         match commands.recv_timeout(wait) {
-            Ok(c) => st.apply(sim.as_mut(), c),
+            Ok(c) => st.apply(sim.as_mut(), c, &out),
             Err(RecvTimeoutError::Timeout) => {}
             Err(RecvTimeoutError::Disconnected) => return,
         }
     }
 }
 
-/// Where the sockets reach the scene: its requests' channel, its frames, its header.
+/// Where the sockets reach the scene: its requests' channel and its output.
 #[derive(Debug)]
 pub struct Hub {
     pub commands: Sender<Command>,
-    pub frames: broadcast::Sender<Bytes>,
-    pub header: String,
+    pub out: Outbox,
 }
 
 #[cfg(test)]
@@ -206,6 +292,23 @@ mod tests {
         assert!(bad(r#"{"type":"drag","target":[1,2,3],"seq":-1}"#).contains("bad message"));
         assert!(bad(r#"{"type":"release","seq":1,"extra":1}"#).contains("unknown field"));
         assert!(bad(r#"{"type":"grab","point":[1e9,0,0],"seq":1}"#).contains("`point`"));
+        let fold = |shape: &str, h: f64, n: usize| {
+            let pts = vec![[0.0, 1.0, 0.1]; n];
+            Request::parse(&serde_json::json!({"type": "fold", "shape": shape, "height": h, "points": pts, "seq": 3}).to_string())
+        };
+        assert!(matches!(
+            fold("ridge", 0.015, 3),
+            Ok(Request::Fold { seq: 3, .. })
+        ));
+        assert!(
+            fold("bump", 0.015, 3)
+                .unwrap_err()
+                .contains("`ridge` or `valley`")
+        );
+        assert!(fold("valley", 0.5, 3).unwrap_err().contains("0.001 to 0.1"));
+        assert!(fold("valley", f64::NAN, 3).is_err());
+        assert!(fold("ridge", 0.01, 1).unwrap_err().contains("2 to 64"));
+        assert!(fold("ridge", 0.01, 65).is_err());
         let long = format!(
             r#"{{"type":"release","seq":1,"pad":"{}"}}"#,
             "x".repeat(5000)

@@ -65,17 +65,20 @@ async fn upgrade(ws: WebSocketUpgrade, State(hub): State<Arc<Hub>>) -> Response 
 /// some) and answers, while its requests go to the scene.
 async fn session(socket: WebSocket, hub: Arc<Hub>) {
     let (mut out, mut input) = socket.split();
-    let header = format!(r#"{{"type":"header","header":{}}}"#, hub.header);
+    let header = match hub.out.header.read() {
+        Ok(h) => crate::live::header_message(&h),
+        Err(_) => return,
+    };
     if out.send(Message::Text(header.into())).await.is_err() {
         return;
     }
     let (reply, mut answers) = tokio::sync::mpsc::unbounded_channel::<String>();
-    let mut frames = hub.frames.subscribe();
+    let mut frames = hub.out.frames.subscribe();
     let writer = tokio::spawn(async move {
         loop {
             let m = tokio::select! {
                 f = frames.recv() => match f {
-                    Ok(b) => Message::Binary(b),
+                    Ok(m) => m,
                     Err(RecvError::Lagged(_)) => continue,
                     Err(RecvError::Closed) => break,
                 },

@@ -41,6 +41,7 @@ export function openLive() {
       figures: [],
       onFrame: () => {},
       onAnswer: () => {},
+      onHeader: () => {},
       send: (request) => { if (ws.readyState === WebSocket.OPEN) ws.send(JSON.stringify(request)); },
       source: null,
     };
@@ -54,13 +55,18 @@ export function openLive() {
     ws.onmessage = (e) => {
       if (typeof e.data === 'string') {
         const m = JSON.parse(e.data);
-        if (m.type === 'header') live.header = m.header;
+        // A new header once started: the scene was built again (a fold was drawn).
+        if (m.type === 'header' && started) live.onHeader(m.header);
+        else if (m.type === 'header') live.header = m.header;
         else live.onAnswer(m);
         return;
       }
       if (!live.header) return;
       const h = live.header;
-      const f = parseFrame(e.data, [h.body.vertices, h.coarse.vertices, h.garment.vertices]);
+      const counts = [h.body.vertices, h.coarse.vertices, h.garment.vertices];
+      // A frame of another scene (its header was missed): start again from the scene's header.
+      if (e.data.byteLength < HEAD + 12 * (counts[0] + counts[1] + counts[2])) { live.onHeader(null); return; }
+      const f = parseFrame(e.data, counts);
       live.history.push(f);
       live.figures.push({ frame: 0, max_penetration_m: f.max_penetration_m, max_stretch: f.max_stretch, 'ms:frame': f.ms });
       if (live.history.length > HISTORY) {
@@ -77,12 +83,14 @@ export function openLive() {
 /// pointer drags it in the plane through the grabbed point facing the camera, releasing lets go.
 /// A press elsewhere is left to the camera's controls. Each drag's time to the first frame that
 /// applied it is kept in `state.latencies` (ms).
-export function attachHand(THREE, { canvas, camera, garment, body, controls, live, state }) {
+export function attachHand(THREE, { canvas, camera, garment, body, controls, live, state, scene, fold }) {
   const raycaster = new THREE.Raycaster();
   const plane = new THREE.Plane();
   const sent = new Map();
   let seq = 0;
   let holding = false;
+  // A fold line being drawn: its points on the garment and its picture.
+  let drawing = null;
   state.latencies = [];
   state.grabbed = -1;
   const ray = (e) => {
@@ -100,12 +108,30 @@ export function attachHand(THREE, { canvas, camera, garment, body, controls, liv
     // The camera's controls do not see this press.
     e.stopImmediatePropagation();
     canvas.setPointerCapture(e.pointerId);
-    holding = true;
     controls.enabled = false;
+    if (fold.draw()) {
+      drawing = { points: [hit.point.clone()], line: new THREE.Line(new THREE.BufferGeometry(), new THREE.LineBasicMaterial({ color: 0xff2060 })) };
+      drawing.line.frustumCulled = false;
+      scene.add(drawing.line);
+      return;
+    }
+    holding = true;
     plane.setFromNormalAndCoplanarPoint(camera.getWorldDirection(new THREE.Vector3()), hit.point);
     live.send({ type: 'grab', point: hit.point.toArray(), seq: ++seq });
   }, { capture: true });
   canvas.addEventListener('pointermove', (e) => {
+    if (drawing) {
+      ray(e);
+      const hit = raycaster.intersectObject(garment, false)[0];
+      if (hit && hit.point.distanceTo(drawing.points[drawing.points.length - 1]) > 0.005) {
+        drawing.points.push(hit.point.clone());
+        // A line's buffer does not grow: a new one each time.
+        drawing.line.geometry.dispose();
+        drawing.line.geometry = new THREE.BufferGeometry().setFromPoints(drawing.points);
+        state.dirty();
+      }
+      return;
+    }
     if (!holding) return;
     const target = ray(e).intersectPlane(plane, new THREE.Vector3());
     if (!target) return;
@@ -113,25 +139,47 @@ export function attachHand(THREE, { canvas, camera, garment, body, controls, liv
     sent.set(seq, performance.now());
   });
   const letGo = () => {
+    if (drawing) {
+      const { points, line } = drawing;
+      drawing = null;
+      controls.enabled = true;
+      if (points.length < 2) { scene.remove(line); state.dirty(); return; }
+      // A few points evenly spaced along the line, as a person would click them: the fold is
+      // cut along straight segments between them, and a hand's jitter would zigzag it.
+      const along = [0];
+      for (let i = 1; i < points.length; i++) along.push(along[i - 1] + points[i].distanceTo(points[i - 1]));
+      const total = along[along.length - 1];
+      const n = Math.max(2, Math.min(8, Math.round(total / 0.03) + 1));
+      const picked = Array.from({ length: n }, (_, i) => {
+        const at = (total * i) / (n - 1);
+        let k = 0;
+        while (k < along.length - 2 && along[k + 1] < at) k++;
+        return points[k].toArray();
+      });
+      live.send({ type: 'fold', shape: fold.shape(), height: fold.height(), points: picked, seq: ++seq });
+      state.foldSent = picked.length;
+      state.foldPoints = picked;
+      return;
+    }
     if (!holding) return;
     holding = false;
     controls.enabled = true;
     live.send({ type: 'release', seq: ++seq });
   };
-  // For tests: a point of the canvas (client pixels) where the garment is in front, low in the
-  // middle of the view (a skirt's hem, a shirt's waist), or null.
+  // For tests: a point of the canvas (client pixels) where the garment is in front, in the
+  // middle of the view and of the garment's height there (the waist: it moves least in a walk),
+  // or null.
   state.clothPoint = () => {
     const r = canvas.getBoundingClientRect();
-    let best = null;
-    for (let y = 0.1; y <= 0.9; y += 0.04) {
-      for (let x = 0.4; x <= 0.6; x += 0.05) {
-        raycaster.setFromCamera(new THREE.Vector2(x * 2 - 1, 1 - y * 2), camera);
-        const g = raycaster.intersectObject(garment, false)[0];
-        const b = body.visible ? raycaster.intersectObject(body, false)[0] : null;
-        if (g && (!b || g.distance < b.distance) && (!best || y > best.y)) best = { x, y };
-      }
+    const hits = [];
+    for (let y = 0.1; y <= 0.9; y += 0.02) {
+      raycaster.setFromCamera(new THREE.Vector2(0, 1 - y * 2), camera);
+      const g = raycaster.intersectObject(garment, false)[0];
+      const b = body.visible ? raycaster.intersectObject(body, false)[0] : null;
+      if (g && (!b || g.distance < b.distance)) hits.push(y);
     }
-    return best && { x: r.left + best.x * r.width, y: r.top + best.y * r.height };
+    if (!hits.length) return null;
+    return { x: r.left + 0.5 * r.width, y: r.top + hits[Math.floor(hits.length / 2)] * r.height };
   };
   canvas.addEventListener('pointerup', letGo);
   canvas.addEventListener('pointercancel', letGo);

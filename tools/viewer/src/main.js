@@ -190,6 +190,7 @@ async function main() {
   // Whether the picture is out of date (live pages draw only then).
   let dirty = true;
   controls.addEventListener('change', () => { dirty = true; });
+  state.dirty = () => { dirty = true; };
   state.showMs = 0;
   state.renderMs = 0;
   function show(k) {
@@ -278,7 +279,14 @@ async function main() {
   if (!view.frame(0).depth) $('colour').querySelector('option[value=penetration]').disabled = true;
   let liveDue = false;
   if (live) {
-    const hand = attachHand(THREE, { canvas: renderer.domElement, camera, garment, body, controls, live, state });
+    const hand = attachHand(THREE, {
+      canvas: renderer.domElement, camera, garment, body, controls, live, state, scene,
+      fold: {
+        draw: () => $('fold-draw').checked,
+        shape: () => $('fold-shape').value,
+        height: () => Math.min(Math.max(Number($('fold-height').value) || 15, 1), 100) / 1000,
+      },
+    });
     state.liveFrames = 1;
     // Frames are only taken here; the next animation frame draws the newest (a page slower than
     // the scene skips frames instead of falling behind).
@@ -289,10 +297,14 @@ async function main() {
       hand.frame(f);
       liveDue = true;
     };
+    $('fold-tools').hidden = false;
     live.onAnswer = (m) => {
       if (m.type === 'error') { state.answers = (state.answers || []).concat([m.message]); $('status').textContent = m.message; }
       if (m.type === 'grabbed') $('status').textContent = `holding particle ${m.particle}`;
+      if (m.type === 'folded') $('status').textContent = 'fold built; the scene starts over';
     };
+    // The scene was built again (a fold): the page starts over on its new meshes.
+    live.onHeader = () => window.location.reload();
   }
   $('speed').addEventListener('change', (e) => { state.speed = Number(e.target.value); });
   $('colour').addEventListener('change', (e) => { state.colour = e.target.value; show(state.frame); });
@@ -377,6 +389,7 @@ async function main() {
   $('status').textContent = live
     ? `live at ${h.fps} fps; ${h.garment.vertices} garment vertices; press on the cloth to drag it`
     : `${view.frames} frames at ${h.fps} fps; ${h.garment.vertices} garment vertices`;
+  state.garmentVertices = h.garment.vertices;
   state.ready = true;
 }
 

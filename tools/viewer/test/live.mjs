@@ -1,11 +1,12 @@
 // Drives the live page of `tryon view SCENE` in headless Chromium (Debian's, /usr/bin/chromium)
-// with playwright-core: waits for frames, presses on the garment low in the middle of the view,
+// with playwright-core: waits for frames, presses on the garment in the middle of the view,
 // drags the pointer up and to the side for about 1.5 s, lets go, and records where the grabbed
 // particle was before and after, each drag's time to the first frame that applied it, and the
 // frames a second drawn. Then it sends the server garbage on a second socket (text that is not
 // JSON, an unknown request, coordinates out of range, an oversized message, a binary one) and
-// keeps what the server answered and whether frames still come. Prints one JSON object; the
-// screenshots go into OUTDIR.
+// keeps what the server answered and whether frames still come. Before the drag it draws a fold
+// line on the garment (P3) and waits for the page to start over on the scene built again with it.
+// Prints one JSON object; the screenshots go into OUTDIR.
 //   node test/live.mjs URL OUTDIR
 import { chromium } from 'playwright-core';
 import { mkdirSync } from 'node:fs';
@@ -37,11 +38,38 @@ try {
   result.render_ms = await viewer(page, () => window.tryonViewer.renderMs / window.tryonViewer.framesDrawn);
   result.show_ms = await viewer(page, () => window.tryonViewer.showMs / window.tryonViewer.framesDrawn);
   result.pixel_ratio = await viewer(page, () => window.tryonViewer.pixelRatio);
+  // A ridge drawn upward from a point low on the garment: the scene is built again with it and
+  // the page starts over on the new meshes.
+  const before = await viewer(page, () => window.tryonViewer.garmentVertices);
+  await page.check('#fold-draw');
+  const p = await viewer(page, () => window.tryonViewer.clothPoint());
+  if (p) {
+    const reloaded = page.waitForEvent('load', { timeout: 120000 });
+    // Up and across the front, off the middle (a line along a row of vertices adds none).
+    await page.mouse.move(p.x + 20, p.y + 60);
+    await page.mouse.down();
+    for (let i = 1; i <= 40; i++) {
+      await page.mouse.move(p.x + 20 + i, p.y + 60 - 3 * i);
+      await page.waitForTimeout(20);
+    }
+    await page.locator('#scene').screenshot({ path: `${out}/live-fold-drawn.png` });
+    await page.mouse.up();
+    result.fold_points = await viewer(page, () => window.tryonViewer.foldPoints);
+    // What the page said, should it not start over.
+    reloaded.catch(() => {});
+    await page.waitForTimeout(2000);
+    result.fold_status = await viewer(page, () => document.getElementById('status').textContent).catch(() => 'reloaded');
+    await reloaded;
+    await page.waitForFunction(() => window.tryonViewer && (window.tryonViewer.ready || window.tryonViewer.errors.length), null, { timeout: 60000 });
+    await page.waitForTimeout(1500);
+    result.fold = { before, after: await viewer(page, () => window.tryonViewer.garmentVertices) };
+    await page.locator('#scene').screenshot({ path: `${out}/live-fold-built.png` });
+  }
+  await page.uncheck('#fold-draw').catch(() => {});
   await page.locator('#scene').screenshot({ path: `${out}/live-before.png` });
   const at = await viewer(page, () => window.tryonViewer.clothPoint());
   result.press = at;
-  // Frames that came while the page was busy finding that point are taken first.
-  await page.waitForTimeout(1000);
+  result.drawing_before_drag = await viewer(page, () => document.getElementById('fold-draw').checked);
   if (at) {
     await page.mouse.move(at.x, at.y);
     await page.mouse.down();
