@@ -9,7 +9,8 @@
 //! `{"type":"error","message":...}` naming what was wrong; nothing the page sends stops the
 //! server. A drag wakes the scene's thread: the next frame starts once half a frame's time has
 //! passed since the last one began, not a whole frame, so a drag shows within about half a
-//! frame plus one frame's work.
+//! frame plus one frame's work (while the pointer keeps moving, scene time then runs up to twice
+//! the wall clock's pace: docs/decisions.md).
 
 use axum::body::Bytes;
 use axum::extract::ws::Message;

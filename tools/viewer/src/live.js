@@ -91,6 +91,8 @@ export function attachHand(THREE, { canvas, camera, garment, body, controls, liv
   let holding = false;
   // A fold line being drawn: its points on the garment and its picture.
   let drawing = null;
+  // The last line sent: shown until the scene starts over, or the next press (when refused).
+  let lastLine = null;
   state.latencies = [];
   state.grabbed = -1;
   const ray = (e) => {
@@ -101,6 +103,7 @@ export function attachHand(THREE, { canvas, camera, garment, body, controls, liv
   };
   canvas.addEventListener('pointerdown', (e) => {
     if (e.button !== 0 || !garment.visible) return;
+    if (lastLine) { scene.remove(lastLine); lastLine.geometry.dispose(); lastLine = null; state.dirty(); }
     ray(e);
     garment.geometry.computeBoundingSphere();
     const hit = raycaster.intersectObject(garment, false)[0];
@@ -159,6 +162,8 @@ export function attachHand(THREE, { canvas, camera, garment, body, controls, liv
       live.send({ type: 'fold', shape: fold.shape(), height: fold.height(), points: picked, seq: ++seq });
       state.foldSent = picked.length;
       state.foldPoints = picked;
+      lastLine = line;
+      state.say?.(`building the ${fold.shape()} (${picked.length} points); the scene starts over with it`);
       return;
     }
     if (!holding) return;

@@ -298,6 +298,7 @@ async function main() {
       liveDue = true;
     };
     $('fold-tools').hidden = false;
+    state.say = (text) => { $('status').textContent = text; };
     live.onAnswer = (m) => {
       if (m.type === 'error') { state.answers = (state.answers || []).concat([m.message]); $('status').textContent = m.message; }
       if (m.type === 'grabbed') $('status').textContent = `holding particle ${m.particle}`;
