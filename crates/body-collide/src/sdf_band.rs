@@ -117,9 +117,16 @@ impl BandGrid<'_> {
         let lo = a.inf(&b).inf(&c) - Vec3::repeat(reach);
         let hi = a.sup(&b).sup(&c) + Vec3::repeat(reach);
         let inv = 1.0 / self.cell;
+        // A node on the box's face is in: a tolerance of 1e-6 cell keeps that true whatever the
+        // rounding of the grid's origin (a body vertex on a node line puts the face there
+        // exactly, and a field focused on the cloth has an origin a few ulps from the whole one).
+        let tol = 1e-6;
         let range = |axis: usize| {
-            let i0 = ((lo[axis] - self.origin[axis]) * inv).ceil().max(0.0) as usize;
-            let i1 = (((hi[axis] - self.origin[axis]) * inv).floor().max(-1.0) + 1.0) as usize;
+            let i0 = ((lo[axis] - self.origin[axis]) * inv - tol).ceil().max(0.0) as usize;
+            let i1 = (((hi[axis] - self.origin[axis]) * inv + tol)
+                .floor()
+                .max(-1.0)
+                + 1.0) as usize;
             i0..i1.min(self.dims[axis])
         };
         let (ri, rj, rk) = (range(0), range(1), range(2));
