@@ -291,7 +291,7 @@ fn a_drag_in_chromium_moves_the_cloth_and_its_frames_come_back() {
     );
     let r: serde_json::Value =
         serde_json::from_str(text.trim()).unwrap_or_else(|e| panic!("{e}: {text}"));
-    assert_eq!(r["errors"], serde_json::json!([]), "console errors");
+    assert_eq!(r["errors"], serde_json::json!([]), "console errors: {r}");
     assert_eq!(r["page_errors"], serde_json::json!([]));
     assert_eq!(r["live"], true);
     assert!(

@@ -8,9 +8,10 @@
 //! built again with the fold and starts over, and every page gets the new header). A message the server cannot take gets
 //! `{"type":"error","message":...}` naming what was wrong; nothing the page sends stops the
 //! server. A drag wakes the scene's thread: the next frame starts once half a frame's time has
-//! passed since the last one began, not a whole frame, so a drag shows within about half a
-//! frame plus one frame's work (while the pointer keeps moving, scene time then runs up to twice
-//! the wall clock's pace: docs/decisions.md).
+//! passed since the last one began, not a whole frame, and while a particle is held a frame
+//! waits up to one and a half frames for the next drag (`Steering::gap`), so a drag shows
+//! within one frame's work when the pointer moves at about the frame rate (while it keeps
+//! moving faster, scene time runs up to twice the wall clock's pace: docs/decisions.md).
 
 use axum::body::Bytes;
 use axum::extract::ws::Message;
@@ -160,11 +161,27 @@ struct Steering {
     playing: bool,
     /// A drag came since the last frame: the next one is made sooner.
     urgent: bool,
+    /// A particle is held: frames wait a little longer for the next drag.
+    holding: bool,
     /// The last request's `seq` applied.
     ack: u32,
 }
 
 impl Steering {
+    /// Time from one frame to the next. A drag's frame goes half a period after the last one, or
+    /// at once if that has passed; while a particle is held and no drag has come, the next frame
+    /// waits up to one and a half periods for one. Otherwise a frame every period. Frames at a
+    /// steady period would fall just before the drags of a pointer moving at about the frame
+    /// rate, so each drag would wait up to half a period; waiting for the drag instead makes its
+    /// frame at once.
+    fn gap(&self, period: Duration) -> Duration {
+        match (self.urgent, self.holding) {
+            (true, _) => period / 2,
+            (false, true) => period * 3 / 2,
+            (false, false) => period,
+        }
+    }
+
     fn apply(&mut self, sim: &mut dyn LiveSim, c: Command, out: &Outbox) {
         if let Some(s) = c.request.seq() {
             self.ack = s;
@@ -172,7 +189,10 @@ impl Steering {
         match c.request {
             Request::Grab { point, seq } => {
                 let answer = match sim.grab(Vec3::from(point)) {
-                    Ok(p) => serde_json::json!({"type": "grabbed", "seq": seq, "particle": p}),
+                    Ok(p) => {
+                        self.holding = true;
+                        serde_json::json!({"type": "grabbed", "seq": seq, "particle": p})
+                    }
                     Err(m) => serde_json::json!({"type": "error", "seq": seq, "message": m}),
                 };
                 let _ = c.reply.send(answer.to_string());
@@ -182,7 +202,10 @@ impl Steering {
                 sim.drag(Vec3::from(target));
                 self.urgent = true;
             }
-            Request::Release { .. } => sim.release(),
+            Request::Release { .. } => {
+                sim.release();
+                self.holding = false;
+            }
             Request::Play { on } => self.playing = on,
             Request::Fold { line, seq } => {
                 let answer = match sim.fold(&line) {
@@ -233,6 +256,7 @@ pub fn run_scene(mut sim: Box<dyn LiveSim>, commands: Receiver<Command>, out: Ou
     let mut st = Steering {
         playing: true,
         urgent: false,
+        holding: false,
         ack: 0,
     };
     loop {
@@ -240,7 +264,7 @@ pub fn run_scene(mut sim: Box<dyn LiveSim>, commands: Receiver<Command>, out: Ou
             st.apply(sim.as_mut(), c, &out);
         }
         let now = Instant::now();
-        let due = last + if st.urgent { period / 2 } else { period };
+        let due = last + st.gap(period);
         if st.playing && now >= due {
             last = now;
             st.urgent = false;
@@ -272,6 +296,21 @@ pub struct Hub {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_held_particle_waits_for_its_drag_and_a_drag_goes_soon() {
+        let p = Duration::from_millis(30);
+        let st = |urgent, holding| Steering {
+            playing: true,
+            urgent,
+            holding,
+            ack: 0,
+        };
+        assert_eq!(st(false, false).gap(p), Duration::from_millis(30));
+        assert_eq!(st(false, true).gap(p), Duration::from_millis(45));
+        assert_eq!(st(true, true).gap(p), Duration::from_millis(15));
+        assert_eq!(st(true, false).gap(p), Duration::from_millis(15));
+    }
 
     #[test]
     fn requests_are_read_and_bad_ones_named() {

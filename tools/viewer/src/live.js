@@ -95,6 +95,10 @@ export function attachHand(THREE, { canvas, camera, garment, body, controls, liv
   let lastLine = null;
   state.latencies = [];
   state.grabbed = -1;
+  // three.js tests a ray against the geometry's bounding sphere and box before its triangles,
+  // and both were computed for an earlier frame (the box for the framing): a garment that has
+  // moved since was missed wherever it left them.
+  const fresh = (mesh) => { mesh.geometry.computeBoundingSphere(); mesh.geometry.computeBoundingBox(); };
   const ray = (e) => {
     const r = canvas.getBoundingClientRect();
     const ndc = new THREE.Vector2(((e.clientX - r.left) / r.width) * 2 - 1, -((e.clientY - r.top) / r.height) * 2 + 1);
@@ -105,7 +109,7 @@ export function attachHand(THREE, { canvas, camera, garment, body, controls, liv
     if (e.button !== 0 || !garment.visible) return;
     if (lastLine) { scene.remove(lastLine); lastLine.geometry.dispose(); lastLine = null; state.dirty(); }
     ray(e);
-    garment.geometry.computeBoundingSphere();
+    fresh(garment);
     const hit = raycaster.intersectObject(garment, false)[0];
     if (!hit) return;
     // The camera's controls do not see this press.
@@ -113,6 +117,10 @@ export function attachHand(THREE, { canvas, camera, garment, body, controls, liv
     canvas.setPointerCapture(e.pointerId);
     controls.enabled = false;
     if (fold.draw()) {
+      // The scene holds still while the line is drawn: every point then lies on the same
+      // garment, which the server carries back to the start as one (a walking garment drawn
+      // on over a second put the first points on a place it had left).
+      if (state.playing) live.send({ type: 'play', on: false });
       drawing = { points: [hit.point.clone()], line: new THREE.Line(new THREE.BufferGeometry(), new THREE.LineBasicMaterial({ color: 0xff2060 })) };
       drawing.line.frustumCulled = false;
       scene.add(drawing.line);
@@ -146,7 +154,9 @@ export function attachHand(THREE, { canvas, camera, garment, body, controls, liv
       const { points, line } = drawing;
       drawing = null;
       controls.enabled = true;
-      if (points.length < 2) { scene.remove(line); state.dirty(); return; }
+      // Playing again: at once if nothing is sent, else after the fold (the scene starts over).
+      const resume = () => { if (state.playing) live.send({ type: 'play', on: true }); };
+      if (points.length < 2) { scene.remove(line); state.dirty(); resume(); return; }
       // A few points evenly spaced along the line, as a person would click them: the fold is
       // cut along straight segments between them, and a hand's jitter would zigzag it.
       const along = [0];
@@ -160,6 +170,7 @@ export function attachHand(THREE, { canvas, camera, garment, body, controls, liv
         return points[k].toArray();
       });
       live.send({ type: 'fold', shape: fold.shape(), height: fold.height(), points: picked, seq: ++seq });
+      resume();
       state.foldSent = picked.length;
       state.foldPoints = picked;
       lastLine = line;
@@ -177,6 +188,8 @@ export function attachHand(THREE, { canvas, camera, garment, body, controls, liv
   state.clothPoint = () => {
     const r = canvas.getBoundingClientRect();
     const hits = [];
+    fresh(garment);
+    if (body.visible) fresh(body);
     for (let y = 0.1; y <= 0.9; y += 0.02) {
       raycaster.setFromCamera(new THREE.Vector2(0, 1 - y * 2), camera);
       const g = raycaster.intersectObject(garment, false)[0];
