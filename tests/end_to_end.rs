@@ -356,7 +356,14 @@ fn the_demo_surface_stays_out_of_the_body_and_wrinkles_restore_length() {
         for s in &stages {
             assert!(run.stats.stages.contains_key(*s), "stage {s} not timed");
         }
-        errors.push(run.stats.metrics.length_error.unwrap());
+        let m = &run.stats.metrics;
+        errors.push(m.length_error.unwrap());
+        let shares = [m.length_restored_share, m.length_restored_share_reference];
+        assert!(
+            m.length_error_reference.unwrap() > 0.0
+                && shares.iter().all(|s| (0.0..=1.0).contains(&s.unwrap())),
+            "{extra}: {m:?}"
+        );
     }
     assert!(
         errors[1] < errors[0],

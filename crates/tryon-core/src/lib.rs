@@ -5,6 +5,7 @@
 pub mod assets;
 pub mod frames;
 pub mod interact;
+pub mod length;
 pub mod math;
 pub mod measure;
 pub mod mesh;

@@ -8,6 +8,7 @@
 
 use crate::frames::{BodyFrame, CoarseFrame, Contact, FineSurface, FineVertexSource, StepReport};
 use crate::interact::Handle;
+pub use crate::length::{LengthJudgement, RESTORED_WITHIN};
 use crate::math::{Real, Vec3};
 use crate::pose::{Pose, Skeleton};
 
@@ -382,9 +383,8 @@ pub trait SurfaceStage: Send {
     fn parts(&self) -> Vec<&'static str>;
     /// Updates `surface` from `input`, timing each part on `clock`.
     fn run(&mut self, input: &SurfaceInput<'_>, surface: &mut FineSurface, clock: &mut dyn Clock);
-    /// The length restoration error this stage can judge on `surface` (mean |fine path length -
-    /// rest| / rest over compressed coarse edges, and how many edges counted), if any.
-    fn length_error(&self, _surface: &FineSurface) -> Option<(Real, usize)> {
+    /// How far `surface` gives back the length the coarse cloth lost, if this stage can judge it.
+    fn length_error(&self, _surface: &FineSurface) -> Option<LengthJudgement> {
         None
     }
     /// The state this stage carries from one frame into the next, for a checkpoint; `None`

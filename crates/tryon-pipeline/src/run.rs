@@ -124,10 +124,10 @@ pub struct RunState {
     /// The loop's next step (1 at the start).
     pub next: usize,
     pub total: StepReport,
-    /// Sums over judged frames of the mean stretch, the share over 1 mm and the length error.
-    pub sums: [Real; 3],
-    /// Frames the length error was judged on.
-    pub length_frames: usize,
+    /// Sums over judged frames of the mean stretch and the share over 1 mm.
+    pub sums: [Real; 2],
+    /// Sums of the length restoration figures.
+    pub length: crate::stats::LengthSums,
     /// Kept in a self-describing form: stats.json leaves out empty fields, which a compact
     /// binary form cannot.
     #[serde(with = "crate::stats::self_described")]
@@ -278,8 +278,8 @@ impl Pipeline {
             loop_state: st,
             next: 1,
             total: StepReport::default(),
-            sums: [0.0; 3],
-            length_frames: 0,
+            sums: [0.0; 2],
+            length: Default::default(),
             stats,
             timers: Vec::new(),
             pending: None,
@@ -414,14 +414,12 @@ impl Pipeline {
     ) {
         let stats = &mut state.stats;
         stats.metrics.judged_frames += 1;
-        if let Some((e, n)) = timers.time("referee", || {
+        if let Some(j) = timers.time("referee", || {
             self.surface_stages
                 .iter()
                 .find_map(|s| s.length_error(&self.surface))
-        }) && n > 0
-        {
-            state.sums[2] += e;
-            state.length_frames += 1;
+        }) {
+            state.length.add(&j);
         }
         let output = if ctx.refines {
             &self.surface.positions
@@ -493,7 +491,7 @@ impl Pipeline {
             stats.metrics.body_press_deepest_m = Some(c.deepest);
         }
         if ctx.refines {
-            stats.metrics.length_error = Some(state.sums[2] / state.length_frames.max(1) as Real);
+            state.length.fill(&mut stats.metrics);
         }
         stats.metrics.untangle = self.solver.untangled().map(|u| UntangleStats {
             crossings_before: u.crossings_before,

@@ -47,6 +47,16 @@ pub struct Metrics {
     /// |fine path length - rest| / rest (when the scene refines).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub length_error: Option<Real>,
+    /// The same error through the reference surface, the refined surface before wrinkles: what
+    /// `length_error` would be with wrinkles off, judged on the same frames.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub length_error_reference: Option<Real>,
+    /// Mean over frames of the share of compressed coarse edges whose fine path is back within 2%
+    /// of rest, through the output and through the reference surface.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub length_restored_share: Option<Real>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub length_restored_share_reference: Option<Real>,
     /// With `[effects] body_press`: body vertices pressed out of another part per pose (mean), and
     /// the deepest overlap of two parts found before pressing (m). The GLB's body does not carry
     /// the press (its joints alone animate it).
@@ -182,5 +192,39 @@ pub(crate) mod self_described {
     pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Stats, D::Error> {
         let bytes: Vec<u8> = serde::Deserialize::deserialize(d)?;
         ciborium::from_reader(bytes.as_slice()).map_err(serde::de::Error::custom)
+    }
+}
+
+/// Sums over judged frames of the length restoration figures (`Metrics::length_error` and the
+/// rest), for their means at the run's end.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct LengthSums {
+    pub frames: usize,
+    pub error: Real,
+    pub reference_error: Real,
+    pub restored: Real,
+    pub reference_restored: Real,
+}
+
+impl LengthSums {
+    /// Adds a frame's judgement (frames without compressed edges are not counted).
+    pub fn add(&mut self, j: &tryon_core::stages::LengthJudgement) {
+        if j.edges == 0 {
+            return;
+        }
+        self.frames += 1;
+        self.error += j.error;
+        self.reference_error += j.reference_error;
+        self.restored += j.restored;
+        self.reference_restored += j.reference_restored;
+    }
+
+    /// Writes the means into `m`.
+    pub fn fill(&self, m: &mut Metrics) {
+        let n = self.frames.max(1) as Real;
+        m.length_error = Some(self.error / n);
+        m.length_error_reference = Some(self.reference_error / n);
+        m.length_restored_share = Some(self.restored / n);
+        m.length_restored_share_reference = Some(self.reference_restored / n);
     }
 }

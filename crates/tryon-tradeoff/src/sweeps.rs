@@ -436,6 +436,10 @@ struct WrinklePoint {
     wrinkles: bool,
     ms: Real,
     length_error: Real,
+    /// The same run's reference surface (wrinkles not applied), and the shares restored.
+    reference_error: Real,
+    restored: Real,
+    reference_restored: Real,
 }
 
 fn wrinkle_sweep(quick: bool, log: &mut String) -> Result<Vec<WrinklePoint>, String> {
@@ -448,6 +452,12 @@ fn wrinkle_sweep(quick: bool, log: &mut String) -> Result<Vec<WrinklePoint>, Str
             wrinkles: on,
             ms: stage_ms(&s, SURFACE_STAGES),
             length_error: s.metrics.length_error.unwrap_or(Real::NAN),
+            reference_error: s.metrics.length_error_reference.unwrap_or(Real::NAN),
+            restored: s.metrics.length_restored_share.unwrap_or(Real::NAN),
+            reference_restored: s
+                .metrics
+                .length_restored_share_reference
+                .unwrap_or(Real::NAN),
         };
         logln!(
             log,

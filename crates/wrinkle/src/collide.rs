@@ -4,7 +4,7 @@
 use crate::Detail;
 use tryon_core::frames::{CoarseFrame, FineSurface, lattice_index, lattice_len};
 use tryon_core::math::{Real, Vec3, unit, vertex_normals};
-use tryon_core::stages::Collider;
+use tryon_core::stages::{Collider, LengthJudgement, RESTORED_WITHIN};
 
 /// The distance bound of a vertex the collider knows nothing about (`Probe::FAR`): the
 /// nearest-vertex tracker says so only beyond its cull margin (5 cm) of the body's box.
@@ -276,7 +276,14 @@ impl Detail {
     /// mean of `|fine path length - rest| / rest` (with the path through `positions`), and how many
     /// edges counted.
     pub fn length_error(&self, positions: &[Vec3]) -> (Real, usize) {
-        let (mut sum, mut count) = (0.0, 0);
+        let j = self.length_judgement(positions);
+        (j.error, j.edges)
+    }
+
+    /// [`Self::length_error`] through `positions` and through the reference surface, with the
+    /// share of those edges back within [`RESTORED_WITHIN`] of rest through each.
+    pub fn length_judgement(&self, positions: &[Vec3]) -> LengthJudgement {
+        let mut j = LengthJudgement::default();
         for e in 0..self.edges.len() {
             let row = self.edge_fine.row(e);
             let path = |x: &[Vec3]| -> Real {
@@ -288,11 +295,21 @@ impl Detail {
             if self.reference.len() != positions.len() || !(rest > 0.0) {
                 continue;
             }
-            if path(&self.reference) < rest {
-                sum += (path(positions) - rest).abs() / rest;
-                count += 1;
+            let reference = (path(&self.reference) - rest) / rest;
+            if reference < 0.0 {
+                let output = (path(positions) - rest).abs() / rest;
+                j.edges += 1;
+                j.error += output;
+                j.reference_error += -reference;
+                j.restored += Real::from(output <= RESTORED_WITHIN);
+                j.reference_restored += Real::from(-reference <= RESTORED_WITHIN);
             }
         }
-        (if count > 0 { sum / count as Real } else { 0.0 }, count)
+        if j.edges > 0 {
+            let n = j.edges as Real;
+            (j.error, j.reference_error) = (j.error / n, j.reference_error / n);
+            (j.restored, j.reference_restored) = (j.restored / n, j.reference_restored / n);
+        }
+        j
     }
 }

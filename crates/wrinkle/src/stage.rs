@@ -4,8 +4,7 @@
 
 use crate::Detail;
 use tryon_core::frames::FineSurface;
-use tryon_core::math::Real;
-use tryon_core::stages::{Clock, Collider, SurfaceInput, SurfaceStage};
+use tryon_core::stages::{Clock, Collider, LengthJudgement, SurfaceInput, SurfaceStage};
 
 /// [`Detail`] with the collider its fine vertices are tested against (its own tracking caches;
 /// `None` when fine collision is off).
@@ -100,7 +99,7 @@ impl SurfaceStage for DetailStage {
         }
     }
 
-    fn length_error(&self, surface: &FineSurface) -> Option<(Real, usize)> {
-        Some(self.detail.length_error(&surface.positions))
+    fn length_error(&self, surface: &FineSurface) -> Option<LengthJudgement> {
+        Some(self.detail.length_judgement(&surface.positions))
     }
 }

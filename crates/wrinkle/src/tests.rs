@@ -530,3 +530,57 @@ fn a_spike_narrower_than_the_fine_triangles_is_covered() {
         assert!(fine.positions.iter().all(|p| p.y >= 0.003 - 1e-12));
     }
 }
+
+/// The judgement's reference figures come from the reference surface alone: on the linear
+/// refinement each coarse edge's fine path is the straight edge, so its compression and whether it
+/// is within 2% of rest follow from the coarse positions; with wrinkles off the output is the
+/// reference.
+#[test]
+fn the_length_judgement_reads_compression_from_the_reference() {
+    let (mesh, x, forces) = squeezed_sheet();
+    let (tris, _) = mesh.triangulate();
+    let mut edges = std::collections::BTreeSet::new();
+    for t in &tris {
+        for k in 0..3 {
+            let (a, b) = (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]));
+            edges.insert((a as usize, b as usize));
+        }
+    }
+    let compression: Vec<Real> = (edges.iter())
+        .map(|&(a, b)| {
+            let rest = (mesh.positions[a] - mesh.positions[b]).norm();
+            1.0 - (x[a] - x[b]).norm() / rest
+        })
+        .filter(|c| *c > 1e-12)
+        .collect();
+    let within = compression.iter().filter(|c| **c <= 0.02).count();
+    let mean = compression.iter().sum::<Real>() / compression.len() as Real;
+    let run = |wrinkles: bool| {
+        let p = DetailParams {
+            wrinkles,
+            ..DetailParams::default()
+        };
+        let mut d = Detail::new(&linear_fine(&mesh, &x, 2), &mesh.positions, p).unwrap();
+        let mut fine = linear_fine(&mesh, &x, 2);
+        for _ in 0..10 {
+            fine = linear_fine(&mesh, &x, 2);
+            d.wrinkle(&frame(&x, forces.clone()), &mut fine);
+        }
+        d.length_judgement(&fine.positions)
+    };
+    for wrinkles in [false, true] {
+        let j = run(wrinkles);
+        assert_eq!(j.edges, compression.len());
+        assert!(
+            (j.reference_error - mean).abs() < 1e-9,
+            "{j:?}, mean {mean}"
+        );
+        let share = within as Real / compression.len() as Real;
+        assert!((j.reference_restored - share).abs() < 1e-12, "{j:?}");
+        if !wrinkles {
+            assert!((j.error - j.reference_error).abs() < 1e-12);
+            assert_eq!(j.restored, j.reference_restored);
+        }
+    }
+    assert!(run(true).error < run(false).error);
+}
