@@ -224,7 +224,13 @@ fn a_checkpoint_of_another_scene_or_a_damaged_one_is_refused() {
     std::fs::write(&path, &bytes).unwrap();
     let e = Checkpoint::read(&dir).unwrap_err();
     assert!(matches!(e, CheckpointError::Damaged { .. }), "{e}");
-    std::fs::write(&path, b"TRYONCK1").unwrap();
+    // A checkpoint of an earlier layout (its magic) and one cut after the magic are refused.
+    let mut old = bytes.clone();
+    old[..8].copy_from_slice(b"TRYONCK1");
+    std::fs::write(&path, &old).unwrap();
+    let e = Checkpoint::read(&dir).unwrap_err();
+    assert!(matches!(e, CheckpointError::NotACheckpoint { .. }), "{e}");
+    std::fs::write(&path, &bytes[..8]).unwrap();
     let e = Checkpoint::read(&dir).unwrap_err();
     assert!(matches!(e, CheckpointError::NotACheckpoint { .. }), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
