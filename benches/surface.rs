@@ -2,7 +2,8 @@
 //! a 27 x 27-particle square draped on a sphere (the drape scene's body), refined at level 2
 //! ((4 x 26 + 1)^2 = 11,025 fine vertices). Timed per frame: PN refinement, the wrinkle model,
 //! hierarchical fine collision (nearest-vertex tracking, including the fine collider's body update)
-//! and normal blending; `refine_collide` leaves the wrinkle model out. P1 measured 51.6 ms for its
+//! and normal blending; `refine_collide` leaves the wrinkle model out, `all_stages` has the default
+//! (compression) wrinkles and `all_stages_force_model` P1's force-driven ones. P1 measured 51.6 ms for its
 //! 10,912 vertices; the target here is 0.5 ms.
 
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -14,13 +15,16 @@ use tryon_pipeline::pipeline::run_surface;
 use tryon_pipeline::run::Timers;
 use tryon_pipeline::{Pipeline, Scene};
 
-fn scene(wrinkles: bool) -> Pipeline {
+fn scene(model: Option<&str>) -> Pipeline {
+    let wrinkles = model.is_some();
+    let model = model.unwrap_or("compression");
     let text = format!(
         "[scene]\nname = \"surface\"\nfps = 60\nduration = 1.0\nsettle = 0.0\n\
          [body]\nkind = \"sphere\"\nradius = 0.3\nsubdivisions = 4\n\
          [garment]\nkind = \"square\"\nparticles = 27\nsize = 1.0\ndrop_height = 0.4\n\
          [motion]\nkind = \"still\"\n\
-         [effects]\nfollow_body = false\nfriction = 0.3\nrefine = 2\nwrinkles = {wrinkles}\n"
+         [effects]\nfollow_body = false\nfriction = 0.3\nrefine = 2\nwrinkles = {wrinkles}\n\
+         wrinkle_model = \"{model}\"\n"
     );
     let s = Scene::parse(&text, Path::new("surface.toml")).unwrap_or_else(|e| panic!("{e}"));
     let mut p = Pipeline::new(s).unwrap_or_else(|e| panic!("{e}"));
@@ -39,8 +43,12 @@ fn surface(c: &mut Criterion) {
         .sample_size(30)
         .warm_up_time(Duration::from_secs(1))
         .measurement_time(Duration::from_secs(4));
-    for (name, wrinkles) in [("refine_collide", false), ("all_stages", true)] {
-        let mut p = scene(wrinkles);
+    for (name, model) in [
+        ("refine_collide", None),
+        ("all_stages", Some("compression")),
+        ("all_stages_force_model", Some("force")),
+    ] {
+        let mut p = scene(model);
         let body = BodyFrame {
             time: 0.0,
             positions: p.body_mesh.positions.clone(),

@@ -234,6 +234,8 @@ pub struct ArmRaise {
     pub raise_time: Real,
     /// Time held at the top, s.
     pub hold: Real,
+    /// Peak elbow bend, degrees (15% of `raise_deg` unless set by [`ArmRaise::with_elbow`]).
+    pub elbow_deg: Real,
     rig: Rig,
 }
 
@@ -254,8 +256,23 @@ impl ArmRaise {
             raise_deg,
             raise_time: 1.6,
             hold: 0.6,
+            elbow_deg: 0.15 * raise_deg,
             rig: Rig::new(skeleton)?,
         })
+    }
+
+    /// The same motion with the elbows bending to `elbow_deg` (0..=150) at the top.
+    pub fn with_elbow(mut self, elbow_deg: Real) -> Result<Self, ClipError> {
+        if !(elbow_deg.is_finite() && (0.0..=150.0).contains(&elbow_deg)) {
+            return Err(ClipError::BadParameter {
+                name: "elbow_deg",
+                value: elbow_deg,
+                min: 0.0,
+                max: 150.0,
+            });
+        }
+        self.elbow_deg = elbow_deg;
+        Ok(self)
     }
 }
 
@@ -272,11 +289,12 @@ impl MotionSource for ArmRaise {
         let up = smoothstep(t / self.raise_time);
         let down = smoothstep((t - self.raise_time - self.hold) / self.raise_time);
         let a = self.raise_deg * (up - down);
+        let bend = self.elbow_deg * (up - down);
         for side in 0..2 {
             let [ua, fa] = r.arm[side];
             let s = if side == 0 { 1.0 } else { -1.0 };
             out.local_rotations[ua] = rot(Vec3::z(), s * a);
-            out.local_rotations[fa] = r.elbow(side, 0.15 * a);
+            out.local_rotations[fa] = r.elbow(side, bend);
         }
     }
 }
@@ -340,6 +358,29 @@ mod tests {
         walk.sample(2.0 + walk.params.period, &mut b);
         for (qa, qb) in a.local_rotations.iter().zip(&b.local_rotations) {
             assert!(qa.angle_to(qb) < 1e-9);
+        }
+    }
+
+    /// The elbows bend 15% of the raise unless told, as far as told otherwise; a bend beyond
+    /// 150 degrees (or NaN) is refused by name.
+    #[test]
+    fn arm_raise_bends_the_elbows_as_asked() {
+        let s = skeleton();
+        let peak = |clip: &ArmRaise| {
+            let mut pose = Pose::default();
+            clip.sample(clip.raise_time + 0.5 * clip.hold, &mut pose);
+            pose.local_rotations[3].angle().to_degrees()
+        };
+        let clip = ArmRaise::new(&s, 40.0).unwrap();
+        assert!((peak(&clip) - 6.0).abs() < 1e-9);
+        let bent = clip.with_elbow(90.0).unwrap();
+        assert!((peak(&bent) - 90.0).abs() < 1e-9);
+        for bad in [151.0, -1.0, Real::NAN] {
+            let e = ArmRaise::new(&s, 40.0)
+                .unwrap()
+                .with_elbow(bad)
+                .unwrap_err();
+            assert!(e.to_string().contains("elbow_deg"), "{e}");
         }
     }
 

@@ -238,6 +238,10 @@ fn surface_stages(
     pn.evaluate(&garment.positions, &mut surface);
     let params = wrinkle::DetailParams {
         wrinkles: fx.wrinkles,
+        model: fx.wrinkle_model.into(),
+        period: fx.wrinkle_period,
+        min_compression: fx.wrinkle_min_compression,
+        max_compression: fx.wrinkle_max_compression,
         fine_collision: fx.fine_collision && fx.body_collision != CollisionMethod::None,
         blend_normals: fx.blend_normals,
         k_out_plane: fx.k_out_plane,

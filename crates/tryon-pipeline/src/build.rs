@@ -225,7 +225,13 @@ fn mannequin(scene: &Scene, spec: &MannequinBody) -> Result<BuiltBody, AssembleE
                 ..WalkParams::default()
             },
         )?),
-        MotionSection::ArmRaise(a) => Box::new(ArmRaise::new(&man.skeleton, a.raise_deg)?),
+        MotionSection::ArmRaise(a) => {
+            let clip = ArmRaise::new(&man.skeleton, a.raise_deg)?;
+            Box::new(match a.elbow_deg {
+                Some(deg) => clip.with_elbow(deg)?,
+                None => clip,
+            })
+        }
         MotionSection::Bvh(bvh) => {
             let r = real::bvh_motion(
                 scene,

@@ -433,7 +433,9 @@ fn refine_sweep(quick: bool, log: &mut String) -> Result<Vec<RefinePoint>, Strin
 
 #[derive(Clone, Debug)]
 struct WrinklePoint {
-    wrinkles: bool,
+    scene: &'static str,
+    /// "off", or the wrinkle model.
+    model: &'static str,
     ms: Real,
     length_error: Real,
     /// The same run's reference surface (wrinkles not applied), and the shares restored.
@@ -445,27 +447,32 @@ struct WrinklePoint {
 fn wrinkle_sweep(quick: bool, log: &mut String) -> Result<Vec<WrinklePoint>, String> {
     let frames = if quick { 6 } else { 90 };
     let mut out = Vec::new();
-    for on in [false, true] {
-        let sets = vec!["effects.refine=2".into(), format!("effects.wrinkles={on}")];
-        let (s, _) = run_scene("demo-dress-walk.toml", &sets, Some(frames))?;
-        let p = WrinklePoint {
-            wrinkles: on,
-            ms: stage_ms(&s, SURFACE_STAGES),
-            length_error: s.metrics.length_error.unwrap_or(Real::NAN),
-            reference_error: s.metrics.length_error_reference.unwrap_or(Real::NAN),
-            restored: s.metrics.length_restored_share.unwrap_or(Real::NAN),
-            reference_restored: s
-                .metrics
-                .length_restored_share_reference
-                .unwrap_or(Real::NAN),
-        };
-        logln!(
-            log,
-            "wrinkles {on}: surface {:.2} ms, length error {:.4}",
-            p.ms,
-            p.length_error
-        );
-        out.push(p);
+    for scene in ["demo-dress-walk", "shirt-elbow-bend"] {
+        for model in ["off", "force", "compression"] {
+            let mut sets = vec!["effects.refine=2".to_string()];
+            sets.push(format!("effects.wrinkles={}", model != "off"));
+            if model != "off" {
+                sets.push(format!("effects.wrinkle_model=\"{model}\""));
+            }
+            let (s, _) = run_scene(&format!("{scene}.toml"), &sets, Some(frames))?;
+            let m = &s.metrics;
+            let p = WrinklePoint {
+                scene,
+                model,
+                ms: stage_ms(&s, SURFACE_STAGES),
+                length_error: m.length_error.unwrap_or(Real::NAN),
+                reference_error: m.length_error_reference.unwrap_or(Real::NAN),
+                restored: m.length_restored_share.unwrap_or(Real::NAN),
+                reference_restored: m.length_restored_share_reference.unwrap_or(Real::NAN),
+            };
+            logln!(
+                log,
+                "{scene} wrinkles {model}: surface {:.2} ms, length error {:.4}",
+                p.ms,
+                p.length_error
+            );
+            out.push(p);
+        }
     }
     Ok(out)
 }

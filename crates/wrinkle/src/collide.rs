@@ -244,6 +244,19 @@ impl Detail {
         }
         let h = self.params.h_normal;
         let x = &fine.positions;
+        // With many vertices to blend, each fine triangle's normal once (rather than once per
+        // corner): a vertex's deformed normal is the sum over its row either way.
+        let active = (0..x.len())
+            .filter(|&i| self.height[i] + self.raise[i] > 0.0)
+            .count();
+        let faces = gather && 3 * active > fine.triangles.len();
+        if faces {
+            self.face_cross.clear();
+            self.face_cross.extend(fine.triangles.iter().map(|t| {
+                let [a, b, c] = t.map(|v| v as usize);
+                (x[b] - x[a]).cross(&(x[c] - x[a]))
+            }));
+        }
         for i in 0..x.len() {
             let dh = self.height[i] + self.raise[i];
             let alpha = (dh / h).clamp(0.0, 1.0);
@@ -252,7 +265,11 @@ impl Detail {
                 fine.normals[i] = pn;
                 continue;
             }
-            let mut nd = if gather {
+            let mut nd = if faces {
+                let row = self.vertex_tris.row(i);
+                let sum: Vec3 = row.iter().map(|&t| self.face_cross[t as usize]).sum();
+                unit(&sum, 1e-30).unwrap_or(Vec3::y())
+            } else if gather {
                 let mut sum = Vec3::zeros();
                 for &t in self.vertex_tris.row(i) {
                     let [a, b, c] = fine.triangles[t as usize];

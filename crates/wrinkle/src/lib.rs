@@ -17,6 +17,10 @@
 //!   vertices may differ in height only as far as keeps their edge within `max_fine_stretch` of its
 //!   length on the reference surface; a coarse triangle whose three edges are all longer than rest
 //!   gets no wrinkle inside.
+//!   That is the `force` model ([`WrinkleModel::Force`]). The default, `compression`
+//!   ([`relief`]), takes the height from the coarse triangles' compression instead: stripes across
+//!   its direction, as high as gives the lost length back, with eq. 8's deficit of the fine paths
+//!   fed back into the amplitude; then the same `max_fine_stretch` limit.
 //! - [`Detail::fine_collision`] (P1.4.2): hierarchical from the coarse contacts. The lattice is
 //!   probed level by level, a vertex only when the body may be within `margin` of it, judged from
 //!   the two vertices of the coarser level whose edge it halves: its distance is at least theirs
@@ -31,6 +35,7 @@
 
 mod collide;
 mod model;
+pub mod relief;
 pub mod stage;
 
 pub use stage::DetailStage;
@@ -45,6 +50,15 @@ use tryon_core::topology::Csr;
 pub struct DetailParams {
     /// Run the wrinkle model (P1.4.3).
     pub wrinkles: bool,
+    /// Which heights the wrinkle model gives (see [`WrinkleModel`]).
+    pub model: WrinkleModel,
+    /// Wavelength of the compression relief, in fine edges (>= 2).
+    pub period: Real,
+    /// Compression the fabric takes up in its plane without buckling: the relief gives back only
+    /// what lies beyond it.
+    pub min_compression: Real,
+    /// Compression the relief gives back at most (`1/s - 1` of the smallest principal stretch `s`).
+    pub max_compression: Real,
     /// Run fine penetration removal (P1.4.2).
     pub fine_collision: bool,
     /// Blend normals (P1.4.4).
@@ -70,6 +84,10 @@ impl Default for DetailParams {
     fn default() -> Self {
         DetailParams {
             wrinkles: true,
+            model: WrinkleModel::Compression,
+            period: 4.0,
+            min_compression: 0.0,
+            max_compression: 0.5,
             fine_collision: true,
             blend_normals: true,
             k_out_plane: 1.0,
@@ -81,6 +99,19 @@ impl Default for DetailParams {
             pokes: true,
         }
     }
+}
+
+/// Where the wrinkle heights come from.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WrinkleModel {
+    /// P1.4.3 as written: heights driven by the coarse elastic forces (eqs. 4-12), carried from
+    /// frame to frame.
+    Force,
+    /// Stripes across each coarse vertex's compression direction whose amplitude gives the lost
+    /// length back ([`relief`]), then P1.4.3.4's constraints.
+    #[default]
+    Compression,
 }
 
 /// Why a detail model could not be built.
@@ -151,6 +182,8 @@ pub struct Detail {
     fine_edges: Vec<[u32; 2]>,
     /// Interior fine vertices of each coarse triangle.
     interior: Csr,
+    /// The compression relief's geometry and fields.
+    pub relief: relief::Relief,
     /// The lines forces are interpolated along (eqs. 4-5), built once: first each coarse edge's
     /// fine vertices (`edge_fine`'s rows), then inside each coarse triangle the lattice rows of
     /// both directions. Per item, `line_step` is the fine edge to the next item (unused on a line's
@@ -184,9 +217,12 @@ pub struct Detail {
     which: Vec<u32>,
     probes: Vec<Probe>,
     deformed_normals: Vec<Vec3>,
+    /// Scratch: each fine triangle's (unnormalised) normal this frame.
+    #[serde(skip)]
+    face_cross: Vec<Vec3>,
 }
 
-fn csr(rows: usize, pairs: &mut [(u32, u32)]) -> Csr {
+pub(crate) fn csr(rows: usize, pairs: &mut [(u32, u32)]) -> Csr {
     pairs.sort_unstable();
     let mut offsets = vec![0u32; rows + 1];
     for &(r, _) in pairs.iter() {
@@ -240,6 +276,19 @@ impl Detail {
             params.max_fine_stretch,
             params.max_fine_stretch >= 1.0,
             ">= 1",
+        )?;
+        check("period", params.period, params.period >= 2.0, ">= 2")?;
+        check(
+            "min_compression",
+            params.min_compression,
+            (0.0..=0.2).contains(&params.min_compression),
+            "0..=0.2",
+        )?;
+        check(
+            "max_compression",
+            params.max_compression,
+            (0.0..=1.0).contains(&params.max_compression),
+            "0..=1",
         )?;
         let n = fine.segments;
         if n == 0 {
@@ -419,6 +468,7 @@ impl Detail {
             offsets: line_offsets,
             items: line_items,
         };
+        let relief = relief::Relief::new(&tris, coarse_rest, fine, n, params.period);
         Ok(Detail {
             params,
             n,
@@ -434,6 +484,7 @@ impl Detail {
             tri_count: fine.triangles.len(),
             fine_edges,
             interior,
+            relief,
             lines,
             line_step,
             line_sign,
@@ -456,6 +507,7 @@ impl Detail {
             which: Vec::new(),
             probes: Vec::new(),
             deformed_normals: Vec::new(),
+            face_cross: Vec::new(),
         })
     }
 

@@ -1,7 +1,7 @@
 //! The wrinkle model of P1.4.3 (eqs. 3-12 and the constraints of 4.3.4): each fine edge's
 //! geometry, forces interpolated from the coarse particles, and the height change per frame.
 
-use crate::Detail;
+use crate::{Detail, WrinkleModel};
 use tryon_core::frames::{CoarseFrame, FineSurface};
 use tryon_core::math::{Real, Vec3};
 
@@ -100,7 +100,58 @@ impl Detail {
         }
         let nf = fine.positions.len();
         let x = std::mem::take(&mut fine.positions);
-        self.edge_geometry(&x);
+        let mut new_height = std::mem::take(&mut self.new_height);
+        new_height.resize(nf, 0.0);
+        if self.params.model == WrinkleModel::Compression {
+            let band = (self.params.min_compression, self.params.max_compression);
+            self.relief
+                .heights(&coarse.positions, fine, band, &mut new_height);
+        } else {
+            self.force_heights(coarse, fine, &x, &mut new_height);
+        }
+        self.constrain(&mut new_height);
+        self.new_height = std::mem::replace(&mut self.height, new_height);
+        let mut x = x;
+        let mut hmax: Real = 0.0;
+        for i in 0..nf {
+            x[i] = self.reference[i] + self.control[i] * self.height[i];
+            hmax = hmax.max(self.height[i]);
+        }
+        self.stats.max_height = hmax;
+        if self.params.model == WrinkleModel::Compression {
+            let paths = self.edge_paths(&x);
+            self.relief
+                .adapt(&self.edges, &paths, self.params.min_compression);
+        }
+        fine.positions = x;
+    }
+
+    /// Each coarse edge's rest length and fine path length through the reference surface and
+    /// through `x`.
+    pub(crate) fn edge_paths(&self, x: &[Vec3]) -> Vec<(Real, Real, Real)> {
+        (0..self.edges.len())
+            .map(|e| {
+                let row = self.edge_fine.row(e);
+                let path = |p: &[Vec3]| -> Real {
+                    row.windows(2)
+                        .map(|w| (p[w[1] as usize] - p[w[0] as usize]).norm())
+                        .sum()
+                };
+                (self.edge_rest[e], path(&self.reference), path(x))
+            })
+            .collect()
+    }
+
+    /// P1.4.3's heights (eqs. 6-12) from the carried ones into `new_height`.
+    fn force_heights(
+        &mut self,
+        coarse: &CoarseFrame,
+        fine: &FineSurface,
+        x: &[Vec3],
+        new_height: &mut [Real],
+    ) {
+        let nf = x.len();
+        self.edge_geometry(x);
         self.interpolate_forces(coarse, nf);
         // Vertical forces (eqs. 6-7).
         self.vforce.clear();
@@ -157,8 +208,7 @@ impl Detail {
             self.expected[i] += term;
             self.expected[j] += term;
         }
-        let mut new_height = std::mem::take(&mut self.new_height);
-        new_height.clone_from(&self.height);
+        new_height.copy_from_slice(&self.height);
         for i in 0..nf {
             let src = &fine.sources[i];
             let req = if i < self.coarse_vertices {
@@ -190,7 +240,8 @@ impl Detail {
             };
             new_height[i] = (self.height[i] + dh).max(0.0);
         }
-        // No wrinkle inside a triangle all of whose edges are stretched.
+        // No wrinkle inside a triangle all of whose edges are stretched (P1.4.3.4; the
+        // compression relief fades there instead, from its corners' fields).
         for (f, te) in self.tri_edges.iter().enumerate() {
             if te.iter().all(|&e| self.required_edge[e as usize] < 0.0) {
                 for &v in self.interior.row(f) {
@@ -198,6 +249,10 @@ impl Detail {
                 }
             }
         }
+    }
+
+    /// P1.4.3.4's constraint on this frame's heights that both models share.
+    fn constrain(&self, new_height: &mut [Real]) {
         // Neighbours may not be pulled apart beyond max_fine_stretch (two Gauss-Seidel passes,
         // lowering the higher vertex). The height difference an edge allows is `slope` times its
         // length on the reference surface, compared squared; its square root is taken only
@@ -222,14 +277,5 @@ impl Detail {
                 }
             }
         }
-        self.new_height = std::mem::replace(&mut self.height, new_height);
-        let mut x = x;
-        let mut hmax: Real = 0.0;
-        for i in 0..nf {
-            x[i] = self.reference[i] + self.control[i] * self.height[i];
-            hmax = hmax.max(self.height[i]);
-        }
-        self.stats.max_height = hmax;
-        fine.positions = x;
     }
 }

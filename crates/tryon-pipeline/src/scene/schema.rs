@@ -407,12 +407,16 @@ pub struct ArmRaiseSpec {
     /// How far the arms rise from the rest pose (degrees).
     #[schemars(range(min = 0.0, max = 150.0))]
     pub raise_deg: Real,
+    /// How far the elbows bend at the top (degrees); absent, 15% of `raise_deg`.
+    #[schemars(range(min = 0.0, max = 150.0))]
+    pub elbow_deg: Option<Real>,
 }
 
 impl Default for ArmRaiseSpec {
     fn default() -> Self {
         ArmRaiseSpec {
             raise_deg: ArmRaise::DEFAULT_DEG,
+            elbow_deg: None,
         }
     }
 }

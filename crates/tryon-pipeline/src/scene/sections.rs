@@ -170,6 +170,26 @@ impl Default for ClothSection {
     }
 }
 
+/// Where wrinkle heights come from (`wrinkle::WrinkleModel`).
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, JsonSchema, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum WrinkleModelName {
+    /// P1.4.3 as written: heights driven by the coarse elastic forces (eqs. 4-12).
+    Force,
+    /// Stripes across each region's compression direction, as high as gives the lost length back.
+    #[default]
+    Compression,
+}
+
+impl From<WrinkleModelName> for wrinkle::WrinkleModel {
+    fn from(m: WrinkleModelName) -> Self {
+        match m {
+            WrinkleModelName::Force => wrinkle::WrinkleModel::Force,
+            WrinkleModelName::Compression => wrinkle::WrinkleModel::Compression,
+        }
+    }
+}
+
 /// The garment solver. Adding one: a variant here and its arm in `build::solver`.
 #[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, JsonSchema, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
@@ -280,7 +300,23 @@ pub struct EffectsSection {
     /// P1.4.4: blend normals by wrinkle height (when refine > 0 and wrinkles or fine collision
     /// run).
     pub blend_normals: bool,
-    /// k_out-plane of P1 eqs. 10 and 12 (m/N).
+    /// Where wrinkle heights come from: `compression` lays stripes across each region's
+    /// compression direction with the amplitude that gives back the length the coarse cloth lost;
+    /// `force` is P1.4.3 as written (heights driven by the coarse elastic forces, eqs. 4-12).
+    pub wrinkle_model: WrinkleModelName,
+    /// Wavelength of the `compression` wrinkles, in fine edges.
+    #[schemars(range(min = 2.0, max = 64.0))]
+    pub wrinkle_period: Real,
+    /// Compression the fabric takes up in its plane without buckling (`1/s - 1`, s the smallest
+    /// principal stretch of a coarse triangle): the `compression` wrinkles give back only what
+    /// lies beyond it.
+    #[schemars(range(min = 0.0, max = 0.2))]
+    pub wrinkle_min_compression: Real,
+    /// Largest compression (`1/s - 1`, s the smallest principal stretch of a coarse triangle) the
+    /// `compression` wrinkles give back.
+    #[schemars(range(min = 0.0, max = 1.0))]
+    pub wrinkle_max_compression: Real,
+    /// k_out-plane of P1 eqs. 10 and 12 (m/N), for the `force` wrinkles.
     #[schemars(range(min = 0.0, max = 100.0))]
     pub k_out_plane: Real,
     /// Height at which the deformed surface's normal takes over (m), P1 eq. 13.
@@ -325,6 +361,10 @@ impl Default for EffectsSection {
             fine_collision: true,
             wrinkles: false,
             blend_normals: true,
+            wrinkle_model: WrinkleModelName::default(),
+            wrinkle_period: detail.period,
+            wrinkle_min_compression: detail.min_compression,
+            wrinkle_max_compression: detail.max_compression,
             k_out_plane: detail.k_out_plane,
             h_normal: detail.h_normal,
             fine_skin: detail.skin,
