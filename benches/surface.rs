@@ -3,7 +3,8 @@
 //! ((4 x 26 + 1)^2 = 11,025 fine vertices). Timed per frame: PN refinement, the wrinkle model,
 //! hierarchical fine collision (nearest-vertex tracking, including the fine collider's body update)
 //! and normal blending; `refine_collide` leaves the wrinkle model out, `all_stages` has the default
-//! (compression) wrinkles and `all_stages_force_model` P1's force-driven ones. P1 measured 51.6 ms for its
+//! (compression) wrinkles and `all_stages_force_model` P1's force-driven ones. Each is timed on
+//! the global pool and, as `..._1thread`, in a one-thread pool (the target's condition). P1 measured 51.6 ms for its
 //! 10,912 vertices; the target here is 0.5 ms.
 
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -63,6 +64,17 @@ fn surface(c: &mut Criterion) {
         let mut timers = Timers::default();
         group.bench_function(name, |b| {
             b.iter(|| run_surface(&mut p.surface_stages, &input, &mut p.surface, &mut timers));
+        });
+        // The target is single thread: the same inside a one-thread pool (the probes and pokes
+        // of the fine collision run on rayon).
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .expect("a one-thread pool");
+        group.bench_function(format!("{name}_1thread"), |b| {
+            one.install(|| {
+                b.iter(|| run_surface(&mut p.surface_stages, &input, &mut p.surface, &mut timers));
+            });
         });
     }
     group.finish();

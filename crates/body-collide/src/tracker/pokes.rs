@@ -119,7 +119,12 @@ fn under_triangle(
     }
     let nt = normal / area2;
     let centre = (c[0] + c[1] + c[2]) / 3.0;
-    let radius = c.iter().map(|p| (p - centre).norm()).fold(0.0, Real::max) + reach + depth;
+    let spread = c.iter().map(|p| (p - centre).norm()).fold(0.0, Real::max);
+    let radius = spread + reach + depth;
+    // A vertex under the triangle projects inside it, so within `spread` of the centre across the
+    // normal, and lies at most `max(reach, depth) / FACING` from its plane along it (`poke_at`'s
+    // limits hold along the vertex's normal, at least FACING to the triangle's).
+    let (across2, along) = (spread * spread, reach.max(depth) / FACING);
     seen.clear();
     let mut visited: Vec<u32> = Vec::with_capacity(MAX_VISITS);
     for &k in &tri {
@@ -133,10 +138,14 @@ fn under_triangle(
         let v = visited[next];
         next += 1;
         let p = body.positions[v as usize];
-        if (p - centre).norm() > radius {
+        let d = p - centre;
+        let d2 = d.norm_squared();
+        if d2 > radius * radius {
             continue;
         }
-        if let Some(poke) = poke_at(body, v, p, &c, nt, area2, (reach, depth)) {
+        let h = nt.dot(&d);
+        let under = h.abs() <= along * (1.0 + 1e-9) && d2 - h * h <= across2 * (1.0 + 1e-9) + 1e-18;
+        if under && let Some(poke) = poke_at(body, v, p, &c, nt, area2, (reach, depth)) {
             out.push(Poke {
                 triangle: t,
                 ..poke
