@@ -356,6 +356,31 @@ mod tests {
         (along_x, along_z)
     }
 
+    /// The largest spread of heights among fine vertices sharing a coordinate (`key` of their
+    /// flat position), over those away from the sheet's border across it (`across` within 0.3).
+    fn largest_spread(
+        d: &Detail,
+        flat: &[Vec3],
+        key: impl Fn(&Vec3) -> Real,
+        across: impl Fn(&Vec3) -> Real,
+    ) -> Real {
+        let mut by: std::collections::BTreeMap<i64, Vec<Real>> = Default::default();
+        for (p, h) in flat.iter().zip(&d.height) {
+            if across(p).abs() < 0.3 {
+                by.entry((key(p) * 1e6).round() as i64)
+                    .or_default()
+                    .push(*h);
+            }
+        }
+        by.values()
+            .map(|hs| {
+                let hi = hs.iter().cloned().fold(0.0, Real::max);
+                let lo = hs.iter().cloned().fold(Real::MAX, Real::min);
+                hi - lo
+            })
+            .fold(0.0, Real::max)
+    }
+
     /// Squeezed 10% along x and not along z: the stripes run along z (heights change along x
     /// only), the fine paths along x come back within 2% of rest and those along z stay there.
     #[test]
@@ -364,18 +389,8 @@ mod tests {
         let hmax = d.height.iter().cloned().fold(0.0, Real::max);
         assert!(hmax > 0.005, "highest ridge {hmax} m");
         // Heights of fine vertices at the same x (away from the sheet's border) agree.
-        let mut by_x: std::collections::BTreeMap<i64, Vec<Real>> = Default::default();
-        for (p, h) in flat.iter().zip(&d.height) {
-            if p.z.abs() < 0.3 {
-                by_x.entry((p.x * 1e6).round() as i64).or_default().push(*h);
-            }
-        }
-        for hs in by_x.values() {
-            let (lo, hi) = hs.iter().fold((Real::MAX, 0.0 as Real), |(lo, hi), h| {
-                (lo.min(*h), hi.max(*h))
-            });
-            assert!(hi - lo < 0.1 * hmax, "heights at one x: {hs:?}");
-        }
+        let spread = largest_spread(&d, &flat, |p| p.x, |p| p.z);
+        assert!(spread < 0.1 * hmax, "heights at one x differ by {spread} m");
         let (along_x, along_z) = path_ratios(&d, &x, &flat);
         assert!(!along_x.is_empty() && !along_z.is_empty());
         for r in &along_x {
@@ -392,18 +407,10 @@ mod tests {
         let (d, _, flat) = scaled(1.0, 0.9, 20);
         let hmax = d.height.iter().cloned().fold(0.0, Real::max);
         assert!(hmax > 0.005, "highest ridge {hmax} m");
-        let mut by_z: std::collections::BTreeMap<i64, Vec<Real>> = Default::default();
-        for (p, h) in flat.iter().zip(&d.height) {
-            if p.x.abs() < 0.3 {
-                by_z.entry((p.z * 1e6).round() as i64).or_default().push(*h);
-            }
-        }
-        let spread = by_z.values().map(|hs| {
-            let hi = hs.iter().cloned().fold(0.0, Real::max);
-            let lo = hs.iter().cloned().fold(Real::MAX, Real::min);
-            hi - lo
-        });
-        assert!(spread.fold(0.0, Real::max) < 0.1 * hmax);
+        let spread = largest_spread(&d, &flat, |p| p.z, |p| p.x);
+        assert!(spread < 0.1 * hmax, "heights at one z differ by {spread} m");
+        // And not along x: the heights at one x do differ (the stripes did turn).
+        assert!(largest_spread(&d, &flat, |p| p.x, |p| p.z) > 0.5 * hmax);
     }
 
     /// The fast profile against libm's cosine, over many periods and both signs.
