@@ -169,9 +169,13 @@ impl Relief {
             } else {
                 0.0
             };
-            self.tri_comp[f] = comp;
             let [u, v] = self.basis[f];
-            self.tri_dir[f] = (u * ex + v * ey).try_normalize(1e-30).unwrap_or(u);
+            let dir = (u * ex + v * ey).try_normalize(1e-30).unwrap_or(u);
+            // A non-finite corner (the solver rolls such a state back, but the relief must not
+            // spread it) gives no compression here.
+            let finite = comp.is_finite() && dir.iter().all(|c| c.is_finite());
+            self.tri_comp[f] = if finite { comp } else { 0.0 };
+            self.tri_dir[f] = if finite { dir } else { u };
         }
     }
 
@@ -184,6 +188,9 @@ impl Relief {
                 let f = f as usize;
                 let (w, d) = (self.area[f] * self.tri_comp[f], self.tri_dir[f]);
                 total += self.area[f];
+                if w <= 0.0 {
+                    continue;
+                }
                 for (k, (i, j)) in [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)]
                     .into_iter()
                     .enumerate()
@@ -422,6 +429,25 @@ mod tests {
             let got = super::stripe(phase);
             assert!((got - exact).abs() < 1e-5, "{phase}: {got} vs {exact}");
         }
+    }
+
+    /// A coarse corner at NaN: the heights stay finite (no relief around it) and the rest of
+    /// the sheet still wrinkles.
+    #[test]
+    fn a_non_finite_corner_spreads_nothing() {
+        let mesh = grid_xz(6, 6, 1.0, 1.0, 0.0);
+        let mut x: Vec<Vec3> = (mesh.positions.iter())
+            .map(|p| Vec3::new(p.x * 0.9, p.y, p.z))
+            .collect();
+        x[24] = Vec3::new(Real::NAN, 0.0, 0.0);
+        let fine = linear_fine(&mesh, &mesh.positions, 2);
+        let mut d = Detail::new(&fine, &mesh.positions, DetailParams::default()).unwrap();
+        let mut out = vec![0.0; fine.positions.len()];
+        for _ in 0..3 {
+            d.relief.heights(&x, &fine, (0.0, 0.5), &mut out);
+            assert!(out.iter().all(|h| h.is_finite() && *h >= 0.0));
+        }
+        assert!(out.iter().any(|h| *h > 1e-4));
     }
 
     /// Stretched both ways, or not deformed at all: no relief anywhere.
