@@ -309,7 +309,7 @@ fn the_demo_is_deterministic() {
 fn the_demo_surface_stays_out_of_the_body_and_wrinkles_restore_length() {
     // P1's wrinkles give back the length P1's coarse cloth loses where it is compressed: the
     // demo under P1's solver (under VBD, the demo's own, edges stay within 3% of their length and
-    // there is little to give back: docs/decisions.md, session 46).
+    // there is little to give back: docs/decisions, *solver: vbd*).
     let with = |extra: &str| {
         let text = DEMO_SCENE
             .replace("wrinkles = false\n", extra)

@@ -128,7 +128,7 @@ fn the_shirt_stays_on_the_standing_body_unstretched() {
         });
     // Not yet the dress's 0.97..1.03 on the same stand: where the arm's back and front meet the
     // torso (a crease the gusset does not cover) the contact strains the cloth to about 1.9
-    // (docs/decisions.md, session 51). This bounds it; a shirt cut straight from the skin went to
+    // (docs/decisions, *shirt*). This bounds it; a shirt cut straight from the skin went to
     // 4-16 after one frame.
     assert!(
         (0.3..2.5).contains(&worst),

@@ -15,7 +15,7 @@
 //! As a scene's collider (`body_collision = "exact"`) it also gives the swept test
 //! ([`Collider::sweep`], the same [`SweptBody`] as the nearest-vertex collider's), so a particle a
 //! fast limb would carry through is stopped. It has no pinch search (`probe_opposite`): one was
-//! built and measured, and it stretched the real garments more (docs/decisions.md, session 44).
+//! built and measured, and it stretched the real garments more (docs/decisions, *collider: exact on real scenes*).
 
 use crate::body::{BodyError, BodyMesh};
 use crate::swept::SweptBody;

@@ -86,7 +86,7 @@ pub fn drape(n: usize) -> ClothParams {
 /// squared frequency grows as rigidity / (density edge^4), so it stays a fixed share (about 40%)
 /// of the springs' bound, which keeps 3 substeps per frame at N = 64. (Flexion springs with the
 /// bending limit crumpled less but pumped energy into the sheet until it slid off the sphere; see
-/// docs/decisions.md.)
+/// docs/decisions, *vbd strain limit*.)
 pub fn sheet(h: Real, density: Real) -> ClothParams {
     let base = ClothParams::default();
     let m = density * h * h;

@@ -140,7 +140,7 @@ struct Threads {
 impl Threads {
     /// A job started with `queued` jobs still waiting: a fair share of the cores while others
     /// will follow, every core for the last ones (the batch's tail, when the others end, is left
-    /// to them; docs/decisions.md, 2026-11-29).
+    /// to them; docs/decisions, *batch*).
     fn for_job(&self, queued: usize) -> usize {
         let share = match queued {
             0 => self.cores,

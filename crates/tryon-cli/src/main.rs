@@ -270,7 +270,7 @@ fn main() -> ExitCode {
                 p.stages().join(", ")
             );
             println!(
-                "estimate: {} substeps a frame x {} sweeps, {} fine vertices; peak memory about {:.2} GB, run time about {:.1} min, scene.glb about {:.2} GB (rough: docs/decisions.md)",
+                "estimate: {} substeps a frame x {} sweeps, {} fine vertices; peak memory about {:.2} GB, run time about {:.1} min, scene.glb about {:.2} GB (rough: docs/decisions, budgets)",
                 e.substeps,
                 e.iterations,
                 e.fine_vertices,

@@ -87,7 +87,7 @@ impl Pipeline {
                 .with_root(root, root_rest);
             if build::self_contact_on(&fx, dressed.wear.len()) {
                 // Cloth-cloth contact lets a vertex move only a share of its nearest gap in a
-                // step: an edge the carry tore would stay torn (docs/decisions.md, session 40).
+                // step: an edge the carry tore would stay torn (docs/decisions, *carry keeps edges*).
                 f = f.with_edges(&garment.triangulate().0);
             }
             Some(Box::new(f))

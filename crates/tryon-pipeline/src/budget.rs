@@ -4,7 +4,7 @@
 //! (`tryon run --limit KEY=VALUE`); the error names the scene key that drives the estimate.
 //!
 //! The memory and time models are rough, fitted on this project's release build on a 2-core
-//! machine (docs/decisions.md, session 57): a run's peak memory is about 50 MB plus 4 kB per
+//! machine (docs/decisions, *budgets*): a run's peak memory is about 50 MB plus 4 kB per
 //! particle, 1.2 kB per fine vertex, 22 B per signed-distance cell and 58 B per depth-map pixel;
 //! a frame costs about 1 us per particle, substep and solver iteration plus 8 us per fine vertex
 //! (the surface stages and the exact referee).

@@ -11,7 +11,7 @@
 //! passed since the last one began, not a whole frame, and while a particle is held a frame
 //! waits up to one and a half frames for the next drag (`Steering::gap`), so a drag shows
 //! within one frame's work when the pointer moves at about the frame rate (while it keeps
-//! moving faster, scene time runs up to twice the wall clock's pace: docs/decisions.md).
+//! moving faster, scene time runs up to twice the wall clock's pace: docs/decisions, *viewer and live*).
 
 use axum::body::Bytes;
 use axum::extract::ws::Message;

@@ -1,6 +1,6 @@
 //! Compression relief: wrinkle heights laid across the direction the coarse cloth is compressed
 //! in, with the amplitude that gives the lost length back (the `compression` wrinkle model; P1's
-//! force-driven heights are the `force` model in `model.rs`; why both, docs/decisions.md
+//! force-driven heights are the `force` model in `model.rs`; why both, docs/decisions, *wrinkle model*
 //! 2026-11-29).
 //!
 //! Each coarse triangle's deformation gradient `F` against its rest shape gives the smallest

@@ -152,7 +152,7 @@ pub struct NearestVertexCollider {
     /// since the last check (its climb can stop on another limb only then), else followed by the
     /// climb alone: the hash on every call took the demo's cloth step from 2.4 to 4.2 ms. Per
     /// point: the move count and where the point was at its last check. `resolve` keeps P1's
-    /// climb (docs/decisions.md, 2026-11-23: projected onto the true nearest part, cloth caught
+    /// climb (docs/decisions, *collider: nearest vertex*: projected onto the true nearest part, cloth caught
     /// at an armpit tore).
     moves: u32,
     probe_checked: Vec<(u32, Vec3)>,

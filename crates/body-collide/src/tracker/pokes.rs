@@ -50,7 +50,7 @@ pub(crate) fn pokes_from(
 ) {
     out.clear();
     let n = body.positions.len();
-    let found: Vec<Vec<Poke>> = which
+    let found: Vec<Poke> = which
         .par_iter()
         .with_min_len(64)
         .map_init(
@@ -62,14 +62,17 @@ pub(crate) fn pokes_from(
                 under_triangle(body, nearest, points, (t, *tri), limits, seen)
             },
         )
+        .flat_map_iter(|found| found)
         .collect();
-    out.extend(found.into_iter().flatten());
+    out.extend(found);
 }
 
-/// Which body vertices one walk has visited: a stamp per vertex, so a walk costs what it visits.
+/// Which body vertices one walk has visited: a stamp per vertex, so a walk costs what it visits,
+/// and the walk's queue, kept between walks so that none allocates.
 struct Seen {
     stamp: Vec<u32>,
     now: u32,
+    queue: Vec<u32>,
 }
 
 impl Seen {
@@ -77,11 +80,13 @@ impl Seen {
         Seen {
             stamp: vec![0; n],
             now: 0,
+            queue: Vec::with_capacity(MAX_VISITS + 16),
         }
     }
 
     /// Starts a new walk.
     fn clear(&mut self) {
+        self.queue.clear();
         self.now = self.now.wrapping_add(1);
         if self.now == 0 {
             self.stamp.fill(0);
@@ -126,16 +131,15 @@ fn under_triangle(
     // limits hold along the vertex's normal, at least FACING to the triangle's).
     let (across2, along) = (spread * spread, reach.max(depth) / FACING);
     seen.clear();
-    let mut visited: Vec<u32> = Vec::with_capacity(MAX_VISITS);
     for &k in &tri {
         let v = nearest.get(k as usize).copied().unwrap_or(u32::MAX);
         if (v as usize) < body.positions.len() && seen.insert(v) {
-            visited.push(v);
+            seen.queue.push(v);
         }
     }
     let mut next = 0;
-    while next < visited.len() && visited.len() < MAX_VISITS {
-        let v = visited[next];
+    while next < seen.queue.len() && seen.queue.len() < MAX_VISITS {
+        let v = seen.queue[next];
         next += 1;
         let p = body.positions[v as usize];
         let d = p - centre;
@@ -153,7 +157,7 @@ fn under_triangle(
         }
         for &w in body.ring.row(v as usize) {
             if seen.insert(w) {
-                visited.push(w);
+                seen.queue.push(w);
             }
         }
     }

@@ -25,7 +25,7 @@ const CARRY_REACH: Real = 0.05;
 /// moving its yielding side by the whole deficit threw seam vertices 7 and 27 mm in one move on
 /// the casual suit and tore their edges. Held to this, such a pair is left crossing (the referee
 /// counts it) rather than the cloth torn. A quarter let the running layered mannequin cross
-/// (docs/decisions.md, session 41).
+/// (docs/decisions, *reopening cap*).
 const MOST_PUSH: Real = 0.5;
 
 /// Which side of `st` yields: true for the side of positive weights. Where the vertices' body

@@ -64,7 +64,7 @@ mod tests {
         }
         // Held: a free corner falls 20 m in those 2 s. The spring yields more than the sheet's
         // weight explains (0.2 kg/m^2 x 0.16 m^2 x 9.81 / 2e3 = 0.16 mm) as the sheet swings:
-        // measured 0.125 m, the lag of soft holds noted in docs/decisions.md (session 55).
+        // measured 0.125 m, the lag of soft holds noted in docs/decisions (*kimono dressing*).
         let off = (f.positions[0] - goal).norm();
         assert!(off < 0.2, "corner {off} m from its point");
         s.anchor(&[0], &[goal], 0.0);

@@ -54,7 +54,7 @@ pub struct VbdParams {
     /// Bending rigidity (N m) of the hinges toward the rest dihedral angles (`bending.rs`); 0
     /// (the default) leaves them out. A modelled garment then keeps the side of its folds and
     /// curves; no scene uses it (with it the elegant suit's collar caught under the chin in more
-    /// runs, docs/decisions.md).
+    /// runs, docs/decisions, *vbd bending*).
     pub dihedral: Real,
     /// Contact stiffness (N/m). It must dominate the springs a particle hangs from: at 1e4 the
     /// stretch springs (5e3 / 2 cm = 2.5e5 N/m on a MakeHuman garment) dragged sleeves into the
@@ -72,13 +72,13 @@ pub struct VbdParams {
     pub swept: bool,
     /// Provot's strain limit after the sweeps, a ratio of rest length (0: off). On a free-hanging
     /// sheet it holds the stretch the sweeps leave; on garments pressed to a body it fights the
-    /// contact planes and made every real run worse (docs/decisions.md), so it is off by default.
+    /// contact planes and made every real run worse (docs/decisions, *vbd strain limit*), so it is off by default.
     pub limit: Real,
     /// Passes of that limit per step.
     pub limit_passes: u32,
     /// Body vertices under cloth triangles held 1 mm behind the cloth (`pokes.rs`). Off by
     /// default: it stops the skin showing through the coarse cloth, but with it the elegant
-    /// suit's collar caught under the chin in more runs (docs/decisions.md).
+    /// suit's collar caught under the chin in more runs (docs/decisions, *fine pokes*).
     pub pokes: bool,
     /// The cloth's contact with itself (`crate::self_contact`); `None` leaves it out.
     pub self_contact: Option<SelfParams>,

@@ -10,7 +10,7 @@ impl VbdSim {
     /// and their hinges' angles with them. Every member is kept within its self-contact bound,
     /// kinematic ones too: a band vertex set at its target by `begin` is drawn back to within its
     /// bound of where detection saw it, so bands move no faster than the cloth pressed on them
-    /// (exempting them measured the same; docs/decisions.md, session 41).
+    /// (exempting them measured the same; docs/decisions, *reopening cap*).
     pub(super) fn apply(
         &mut self,
         x: &mut [Vec3],

@@ -123,7 +123,7 @@ fn a_step_hands_the_springs_forces_to_the_frame() {
 
 #[test]
 fn a_sheet_dropped_on_a_sphere_stays_on_it() {
-    // Dropped 5 cm off centre: XPBD creeps off (docs/decisions.md); VBD's friction inside the
+    // Dropped 5 cm off centre: XPBD creeps off (docs/decisions, *solver: xpbd*); VBD's friction inside the
     // solve holds it.
     let mut mesh = grid_xz(31, 31, 1.0, 1.0, 0.5);
     mesh.positions.iter_mut().for_each(|p| p.x += 0.05);

@@ -2,7 +2,7 @@
 //! momentum is kept without outside forces, a folded rest shape stays folded, slivers do not
 //! shrink the step, and contact with friction holds a sheet on a slope. (A sheet dropped on a
 //! sphere still overstretches at the impact and slides off: the open problem, in
-//! docs/decisions.md, so no test claims it.)
+//! docs/decisions, *solver: xpbd*, so no test claims it.)
 
 use super::*;
 use proptest::prelude::*;

@@ -46,7 +46,7 @@ pub struct WearSettings {
     pub hold_stiffness: Real,
     /// A fourth row tied 7 cm under the bust (the datejime), so the fronts cross at the chest
     /// instead of opening in a V to the cord. Off for the stored worn targets (it crumples the
-    /// back collar: their fit's largest error 4-7% becomes 11-13%, docs/decisions.md).
+    /// back collar: their fit's largest error 4-7% becomes 11-13%, docs/decisions, *kimono dressing*).
     pub under_bust_tie: bool,
 }
 

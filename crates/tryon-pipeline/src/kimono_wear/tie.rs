@@ -5,7 +5,7 @@
 //! datejime, an under-bust tie, so the fronts cross at the chest instead of opening in a V to
 //! the waist). Each panel's row is laid by arc length from the back centre, so the left
 //! front wraps over the right. Springs, not held vertices: a held vertex led through another
-//! layer would cross it (docs/decisions.md, session 53), a spring gives way.
+//! layer would cross it (docs/decisions, *kimono dressing*), a spring gives way.
 
 use kimono::KimonoMesh;
 use kimono::mesh::sub;

@@ -99,7 +99,7 @@ pub struct ClothSection {
     pub vbd_swept: bool,
     /// The `vbd` solver holds body vertices found under cloth triangles 1 mm behind the
     /// cloth, so narrow features (a nipple, a shoulder's tip) do not poke through between
-    /// particles. Off by default (docs/decisions.md: with it the elegant suit's collar caught under
+    /// particles. Off by default (docs/decisions, *fine pokes*: with it the elegant suit's collar caught under
     /// the chin in more runs).
     pub vbd_pokes: bool,
     /// The `vbd` solver's strain limit after its sweeps, 0 (off) or a ratio of rest length in
@@ -113,7 +113,7 @@ pub struct ClothSection {
     pub self_thickness: Real,
     /// How self-contact finds candidate pairs: `tree` (bounding volume hierarchies refitted
     /// each step) or `hash` (a spatial hash rebuilt each step); the results agree, the tree is
-    /// faster (docs/decisions.md).
+    /// faster (docs/decisions, *self contact*).
     pub self_broad_phase: BroadPhaseName,
 }
 

@@ -314,7 +314,7 @@ pub fn run_all(quick: bool, out: &Path, summary: Option<&Path>) -> Result<(), St
         r,
         "Over the coarse edges compressed on the reference surface (the refined surface before \
          wrinkles), mean |fine path - rest| / rest, and the share back within 2% of rest. \
-         `force` is P1.4.3 as written, `compression` the default relief (docs/decisions.md, \
+         `force` is P1.4.3 as written, `compression` the default relief (docs/decisions, *wrinkle model*, \
          2026-11-29).\n\n\
          | scene | wrinkles | surface ms | length error | reference's | restored share | reference's |\n\
          |---|---|---|---|---|---|---|"
