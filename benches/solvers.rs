@@ -69,7 +69,7 @@ fn cloth_step(c: &mut Criterion) {
             &[
                 "cloth.solver=\"vbd\"",
                 "garment.particles=64",
-                "cloth.vbd_limit=1.0",
+                "cloth.vbd.limit=1.0",
             ],
             60,
         ),
@@ -79,7 +79,7 @@ fn cloth_step(c: &mut Criterion) {
             &[
                 "cloth.solver=\"vbd\"",
                 "garment.particles=128",
-                "cloth.vbd_limit=1.0",
+                "cloth.vbd.limit=1.0",
             ],
             60,
         ),
@@ -94,13 +94,13 @@ fn cloth_step(c: &mut Criterion) {
         (
             "vbd_makehuman_walk_dihedral",
             "makehuman-dress-walk.toml",
-            &["cloth.vbd_dihedral=1e-4", "cloth.vbd_flexion=0"],
+            &["cloth.vbd.dihedral=1e-4", "cloth.vbd.flexion=0"],
             30,
         ),
         (
             "vbd_makehuman_walk_pokes",
             "makehuman-dress-walk.toml",
-            &["cloth.vbd_pokes=true"],
+            &["cloth.vbd.pokes=true"],
             30,
         ),
         (

@@ -1,6 +1,6 @@
 //! Issue 21's hard cases for the cloth's contact with itself: a sheet dropped on a ball folds
 //! onto itself as it slides off, and no two of its triangles may cross in any frame (judged by
-//! the referee, `tryon_pipeline::crossings`, which shares no code with the solver's contacts).
+//! the referee, `body_collide::crossings`, which shares no code with the solver's contacts).
 
 use tryon_pipeline::{Pipeline, Scene};
 
@@ -99,7 +99,7 @@ fn dressed(text: &str, file: &std::path::Path) -> (usize, Vec<garment_fit::Layer
     let p = Pipeline::new(scene).unwrap_or_else(|e| panic!("{e}"));
     let (tris, _) = p.garment.triangulate();
     let first = p.wear[0].particles.end;
-    let between = tryon_pipeline::crossings::crossings(&p.garment.positions, &tris)
+    let between = body_collide::crossings::crossings(&p.garment.positions, &tris)
         .iter()
         .filter(|[a, b]| (tris[*a as usize][0] < first) != (tris[*b as usize][0] < first))
         .count();
@@ -137,7 +137,7 @@ fn dressed_pieces(scene: &str, self_collision: bool) -> (usize, usize) {
     let p = Pipeline::new(scene).unwrap_or_else(|e| panic!("{e}"));
     let (tris, _) = p.garment.triangulate();
     let piece = garment_fit::components(&p.garment);
-    let pairs = tryon_pipeline::crossings::crossings(&p.garment.positions, &tris);
+    let pairs = body_collide::crossings::crossings(&p.garment.positions, &tris);
     let of = |t: u32| piece[tris[t as usize][0] as usize];
     let between = pairs.iter().filter(|[a, b]| of(*a) != of(*b)).count();
     (pairs.len(), between)

@@ -188,7 +188,7 @@ fn bad_scene_files_name_the_key_and_the_line() {
         e.contains("bad.toml:6") && e.contains("effects.friction") && e.contains("0..=5"),
         "{e}"
     );
-    let e = err(&format!("{base}[cloth]\nintegrator = \"rk5\"\n"));
+    let e = err(&format!("{base}[cloth.p1]\nintegrator = \"rk5\"\n"));
     assert!(
         e.contains("bad.toml:6") && e.contains("rk5") && e.contains("rk4"),
         "{e}"
@@ -212,9 +212,9 @@ fn bad_scene_files_name_the_key_and_the_line() {
         e.contains("bad.toml:6") && e.contains("effects.refine") && e.contains("0..=4"),
         "{e}"
     );
-    let e = err(&format!("{base}[cloth]\nstretch_guard = 0.9\n"));
+    let e = err(&format!("{base}[cloth.p1]\nstretch_guard = 0.9\n"));
     assert!(
-        e.contains("bad.toml:6") && e.contains("cloth.stretch_guard") && e.contains("(1, 10]"),
+        e.contains("bad.toml:6") && e.contains("cloth.p1.stretch_guard") && e.contains("(1, 10]"),
         "{e}"
     );
     let e = err(&format!("{base}[effects]\nh_normal = 0.0\n"));
@@ -385,7 +385,7 @@ fn the_demo_surface_stays_out_of_the_body_and_wrinkles_restore_length() {
 
 #[test]
 fn the_stretch_guard_key_reaches_the_solver_and_zero_turns_it_off() {
-    let base = "[body]\nkind = \"mannequin\"\n[garment]\nkind = \"dress\"\n[cloth]\n";
+    let base = "[body]\nkind = \"mannequin\"\n[garment]\nkind = \"dress\"\n[cloth.p1]\n";
     let guard = |extra: &str| {
         let s = Scene::parse(&format!("{base}{extra}"), Path::new("g.toml")).unwrap();
         // The solver the pipeline assembles for this scene and garment.

@@ -54,7 +54,7 @@ fn the_shirt_is_one_piece_with_four_openings_clear_of_the_body() {
         tris.len()
     );
     assert_eq!(garment_fit::boundary_loops(g).expect("manifold").len(), 4);
-    let crossing = tryon_pipeline::crossings::crossings(&g.positions, &tris);
+    let crossing = body_collide::crossings::crossings(&g.positions, &tris);
     for [a, b] in crossing.iter().take(8) {
         eprintln!(
             "{:?} x {:?}",

@@ -125,18 +125,21 @@ fn the_grab_drags_a_corner_along_its_path() {
 #[test]
 fn every_collider_and_integrator_runs_the_demo_finite() {
     for sets in [
-        ["effects.body_collision=\"sdf\"", "cloth.integrator=\"rk4\""],
+        [
+            "effects.body_collision=\"sdf\"",
+            "cloth.p1.integrator=\"rk4\"",
+        ],
         [
             "effects.body_collision=\"depth_maps\"",
-            "cloth.integrator=\"rk4\"",
+            "cloth.p1.integrator=\"rk4\"",
         ],
         [
             "effects.body_collision=\"exact\"",
-            "cloth.integrator=\"symplectic_euler\"",
+            "cloth.p1.integrator=\"symplectic_euler\"",
         ],
         [
             "effects.body_collision=\"nearest_vertex\"",
-            "cloth.integrator=\"implicit_euler\"",
+            "cloth.p1.integrator=\"implicit_euler\"",
         ],
     ] {
         let s = scene("demo-dress-walk.toml", &sets);
@@ -167,13 +170,13 @@ fn err(file: &str, sets: &[&str]) -> String {
 fn overrides_and_new_keys_are_checked() {
     let e = err("demo-dress-walk.toml", &["effects.refine"]);
     assert!(e.contains("--set") && e.contains("table.key=value"), "{e}");
-    let e = err("demo-dress-walk.toml", &["effects.sdf_resolution=4"]);
+    let e = err("demo-dress-walk.toml", &["effects.sdf.resolution=4"]);
     assert!(
-        e.contains("effects.sdf_resolution") && e.contains("8..=512"),
+        e.contains("effects.sdf.resolution") && e.contains("8..=512"),
         "{e}"
     );
-    let e = err("demo-dress-walk.toml", &["effects.depth_resolution=5"]);
-    assert!(e.contains("effects.depth_resolution"), "{e}");
+    let e = err("demo-dress-walk.toml", &["effects.depth_maps.resolution=5"]);
+    assert!(e.contains("effects.depth_maps.resolution"), "{e}");
     let e = err("demo-dress-walk.toml", &["effects.fine_collider=\"none\""]);
     assert!(e.contains("fine_collision = false"), "{e}");
     let e = err(

@@ -21,7 +21,10 @@ const VARIANTS: [(&str, &str, &[&str]); 6] = [
     (
         "demo-dress-walk",
         "implicit",
-        &["cloth.solver=\"p1\"", "cloth.integrator=\"implicit_euler\""],
+        &[
+            "cloth.solver=\"p1\"",
+            "cloth.p1.integrator=\"implicit_euler\"",
+        ],
     ),
 ];
 

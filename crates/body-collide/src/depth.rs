@@ -233,6 +233,9 @@ impl Collider for DepthMapCollider {
     fn name(&self) -> &'static str {
         "depth_maps"
     }
+    fn capabilities(&self) -> tryon_core::stages::Capabilities {
+        tryon_core::stages::Capabilities::NONE
+    }
 
     fn update(&mut self, frame: &BodyFrame) {
         if self.body.set_frame(frame).is_ok() {

@@ -346,6 +346,13 @@ impl Collider for ExactCollider {
     fn name(&self) -> &'static str {
         "exact"
     }
+    fn capabilities(&self) -> tryon_core::stages::Capabilities {
+        tryon_core::stages::Capabilities {
+            sweep: true,
+            pokes: true,
+            ..tryon_core::stages::Capabilities::NONE
+        }
+    }
 
     fn update(&mut self, frame: &BodyFrame) {
         if frame.positions.len() == self.body.positions.len() {

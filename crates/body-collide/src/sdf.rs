@@ -464,6 +464,12 @@ impl Collider for SdfCollider {
     fn name(&self) -> &'static str {
         "sdf"
     }
+    fn capabilities(&self) -> tryon_core::stages::Capabilities {
+        tryon_core::stages::Capabilities {
+            focus: true,
+            ..tryon_core::stages::Capabilities::NONE
+        }
+    }
 
     fn update(&mut self, frame: &BodyFrame) {
         // A body that has not moved (a settle, a still pose) keeps its field, unless the cloth

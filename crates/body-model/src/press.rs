@@ -11,6 +11,7 @@
 
 use rayon::prelude::*;
 use tryon_core::math::{Real, Vec3, vertex_normals};
+use tryon_core::pose::Skeleton;
 
 /// How far behind a facing part's surface a vertex may be and still be pressed out (m).
 pub const DEEPEST: Real = 0.03;
@@ -26,6 +27,41 @@ pub struct Press {
     pub parts: Vec<u8>,
     /// Distance kept between two parts pressed together (m).
     pub gap: Real,
+}
+
+impl Press {
+    /// Each vertex's part from its strongest joint: part `k + 1` is everything from
+    /// `roots[k]` down the skeleton (a limb, the head), 0 the rest (the torso). `joints` and
+    /// `weights` are the skin's four influences per vertex; a joint outside the skeleton counts
+    /// as the torso.
+    pub fn parts_from_roots(
+        skeleton: &Skeleton,
+        joints: &[[u16; 4]],
+        weights: &[[Real; 4]],
+        roots: &[Option<usize>],
+    ) -> Vec<u8> {
+        let part_of_joint: Vec<u8> = (0..skeleton.parents.len())
+            .map(|mut j| {
+                loop {
+                    if let Some(k) = roots.iter().position(|r| *r == Some(j)) {
+                        break k as u8 + 1;
+                    }
+                    match skeleton.parents[j] {
+                        Some(p) => j = p,
+                        None => break 0,
+                    }
+                }
+            })
+            .collect();
+        joints
+            .iter()
+            .zip(weights)
+            .map(|(j, w)| {
+                let k = (0..4).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap_or(0);
+                part_of_joint.get(j[k] as usize).copied().unwrap_or(0)
+            })
+            .collect()
+    }
 }
 
 /// What one pass did.

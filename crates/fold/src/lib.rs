@@ -1,7 +1,7 @@
 //! P3 (../shared/PAPERS.md, P3): folds added to a cloth model from lines a user draws where a
 //! fold's ridge or valley should run. Algorithm 1 of the paper, step by step:
 //!
-//! 1. the line, snapped to the garment's surface and followed across it (`path`);
+//! 1. the line, landed on the garment from the picture it is drawn on (`land`), snapped to the garment's surface and followed across it (`path`);
 //! 2. mass points added where it crosses the mesh's edges and the faces it crosses subdivided,
 //!    so the line becomes a chain of mesh edges (`split`; the mesh stays conforming and manifold),
 //!    the new points then moved along the normal, out for a ridge and in for a valley, easing to
@@ -20,6 +20,7 @@
 //! first, the rest of the mesh is left as it was.
 
 mod height;
+pub mod land;
 mod path;
 mod smooth;
 mod split;
@@ -27,6 +28,7 @@ mod split;
 mod tests;
 
 pub use height::{fold_height, fold_retention};
+pub use land::{Miss, land};
 pub use smooth::{Round, smooth_round};
 
 use thiserror::Error;

@@ -3,6 +3,7 @@
 //! implementations so each stage can be tested alone.
 
 pub mod assets;
+pub mod capabilities;
 pub mod frames;
 pub mod interact;
 pub mod length;

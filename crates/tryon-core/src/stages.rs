@@ -6,6 +6,7 @@
 //! ordered list of [`SurfaceStage`]s (P1 section 4), and calls nothing else per frame but the
 //! garment's attachments.
 
+pub use crate::capabilities::Capabilities;
 use crate::frames::{BodyFrame, CoarseFrame, Contact, FineSurface, FineVertexSource, StepReport};
 use crate::interact::Handle;
 pub use crate::length::{LengthJudgement, RESTORED_WITHIN};
@@ -122,6 +123,8 @@ pub trait Follower: Send {
 pub trait Collider: Send {
     /// Short name for reports.
     fn name(&self) -> &'static str;
+    /// Which optional methods (focus, pinch, sweep, pokes) it implements; the rest do nothing.
+    fn capabilities(&self) -> Capabilities;
     /// Takes the body's new shape. Called whenever the body moved.
     fn update(&mut self, body: &BodyFrame);
     /// The bounds of the cloth (`lo` to `hi`), given before each [`Collider::update`]: a collider
@@ -442,6 +445,9 @@ impl Collider for NoCollider {
     crate::whole_state!();
     fn name(&self) -> &'static str {
         "none"
+    }
+    fn capabilities(&self) -> Capabilities {
+        Capabilities::NONE
     }
     fn update(&mut self, _body: &BodyFrame) {}
     fn resolve(&mut self, _points: &mut [Vec3], _contacts: &mut Vec<Contact>) {}

@@ -94,7 +94,10 @@ impl Pipeline {
         } else {
             None
         };
-        let mut surface_stages = surface_stages(&scene, &garment, &body.mesh)?;
+        let mut warnings = body.warnings;
+        let body_caps = collider.as_ref().map(|c| (c.name(), c.capabilities()));
+        warnings.extend(build::lacking(&scene, body_caps, "body"));
+        let mut surface_stages = surface_stages(&scene, &garment, &body.mesh, &mut warnings)?;
         if let Some(stage) = fine_layers(&scene, &dressed, &body.mesh, &surface_stages)? {
             surface_stages.push(stage);
         }
@@ -135,7 +138,7 @@ impl Pipeline {
             referee,
             garment,
             placed_moved,
-            warnings: body.warnings,
+            warnings,
             estimate,
             wear: dressed.wear,
             layered: dressed.layered,
@@ -226,6 +229,7 @@ fn surface_stages(
     scene: &Scene,
     garment: &PolyMesh,
     body: &PolyMesh,
+    warnings: &mut Vec<String>,
 ) -> Result<Vec<Box<dyn SurfaceStage>>, AssembleError> {
     let fx = &scene.effects;
     if fx.refine == 0 {
@@ -255,7 +259,13 @@ fn surface_stages(
     let detail = wrinkle::Detail::new(&surface, &garment.positions, params.clone())?;
     let fine_collider = if params.fine_collision {
         let method = fx.fine_collider.unwrap_or(fx.body_collision);
-        Some(build::collider(method, body, 0.0, fx)?)
+        let c = build::collider(method, body, 0.0, fx)?;
+        warnings.extend(build::lacking(
+            scene,
+            Some((c.name(), c.capabilities())),
+            "fine",
+        ));
+        Some(c)
     } else {
         None
     };

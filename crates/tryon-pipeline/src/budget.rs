@@ -125,18 +125,14 @@ pub fn estimate(
     let particles = garment.positions.len();
     let per_frame = 1.0 / (scene.scene.fps * substep.max(1e-12));
     let substeps = (per_frame - 1e-9).ceil().clamp(1.0, 1e15) as usize;
-    let iterations = match c.solver {
-        SolverName::P1 => 1,
-        SolverName::Xpbd => c.xpbd_iterations as usize,
-        SolverName::Vbd => c.vbd_iterations as usize,
-    };
+    let iterations = c.solver.iterations(c);
     let fine_vertices = match fx.refine {
         0 => 0,
         level => fine_vertex_count(garment, level),
     };
     let grid = |m: Option<CollisionMethod>| match m {
-        Some(CollisionMethod::Sdf) => 22.0 * (fx.sdf_resolution as Real).powi(3),
-        Some(CollisionMethod::DepthMaps) => 58.0 * 6.0 * (fx.depth_resolution as Real).powi(2),
+        Some(CollisionMethod::Sdf) => 22.0 * (fx.sdf.resolution as Real).powi(3),
+        Some(CollisionMethod::DepthMaps) => 58.0 * 6.0 * (fx.depth_maps.resolution as Real).powi(2),
         _ => 0.0,
     };
     let fine_collider =
@@ -188,13 +184,7 @@ pub fn fine_vertex_count(coarse: &PolyMesh, level: u8) -> usize {
 
 /// `e` against `limits`: the first limit it passes, naming what to change in the scene.
 pub fn check(e: &Estimate, limits: &Limits) -> Result<(), BudgetError> {
-    let substeps_change = match e.solver {
-        SolverName::P1 => {
-            "P1's stable substep shrinks as the stiffnesses (cloth.k_*) and cloth.spring_damping grow: lower them, or use cloth.solver = \"vbd\" (stable at any stiffness)"
-        }
-        SolverName::Xpbd => "raise cloth.xpbd_substep",
-        SolverName::Vbd => "raise cloth.vbd_substep",
-    };
+    let substeps_change = e.solver.substep_hint();
     let count = |n: usize| n.to_string();
     // (over, what, key, estimate, limit, what to change), in the order they are judged.
     let rows = [
@@ -236,7 +226,7 @@ pub fn check(e: &Estimate, limits: &Limits) -> Result<(), BudgetError> {
             "memory_gb",
             format!("{:.1} GB", e.memory_gb),
             format!("{} GB", limits.memory_gb),
-            "lower effects.refine, effects.sdf_resolution or effects.depth_resolution, or make the garment coarser",
+            "lower effects.refine, effects.sdf.resolution or effects.depth_maps.resolution, or make the garment coarser",
         ),
         (
             e.hours > limits.hours,
@@ -349,7 +339,7 @@ mod tests {
                     ..fine
                 },
                 "--limit substeps=N",
-                "cloth.vbd_substep",
+                "cloth.vbd.substep",
             ),
             (
                 Estimate {

@@ -6,7 +6,7 @@ use crate::real;
 use crate::scene::BroadPhaseName;
 use crate::scene::{
     BodySection, CollisionMethod, EffectsSection, GarmentSection, IntegratorName, MannequinBody,
-    MaterialName, MotionSection, Scene, SolverName, XpbdBendingName,
+    MaterialName, MotionSection, Scene, SolverName,
 };
 use body_collide::{
     BodyError, DepthMapCollider, ExactCollider, NearestVertexCollider, SdfCollider,
@@ -16,8 +16,8 @@ use cloth_dyn::self_contact::SelfParams;
 use cloth_dyn::self_contact::broad::BroadPhase;
 use cloth_dyn::wear::GarmentWear;
 use cloth_dyn::{
-    BuildClothError, ClothModel, ClothParams, ClothSim, Handle, IntegratorKind, VbdParams, VbdSim,
-    XpbdBending, XpbdParams, XpbdSim, presets,
+    BuildClothError, ClothModel, ClothParams, ClothSim, Handle, IntegratorKind, VbdSim, XpbdSim,
+    presets,
 };
 use garment_fit::PatternError;
 use mocap_retarget::{ArmRaise, ClipError, Walk, WalkParams};
@@ -26,7 +26,9 @@ use tryon_core::math::{Real, Vec3};
 use tryon_core::measure::MeasureError;
 use tryon_core::mesh::PolyMesh;
 use tryon_core::shapes::icosphere;
-use tryon_core::stages::{BodyModel, ClothSolver, Collider, MotionSource, NoCollider, StaticBody};
+use tryon_core::stages::{
+    BodyModel, Capabilities, ClothSolver, Collider, MotionSource, NoCollider, StaticBody,
+};
 
 /// Why a scene could not be assembled (after it parsed and passed its range checks).
 #[derive(Debug, Error)]
@@ -320,14 +322,14 @@ pub fn cloth_params(scene: &Scene, garment: &PolyMesh) -> Result<ClothParams, As
     set(&mut p.k_shear, c.k_shear);
     set(&mut p.k_bend, c.k_bend);
     set(&mut p.spring_damping, c.spring_damping);
-    set(&mut p.max_substep, c.substep);
-    if let Some(s) = c.max_strain {
+    set(&mut p.max_substep, c.p1.substep);
+    if let Some(s) = c.p1.max_strain {
         p.max_strain = (s > 0.0).then_some(s);
     }
-    if let Some(n) = c.strain_iterations {
+    if let Some(n) = c.p1.strain_iterations {
         p.strain_iterations = n;
     }
-    if let Some(r) = c.stretch_guard {
+    if let Some(r) = c.p1.stretch_guard {
         p.stretch_guard = (r > 0.0).then_some(r);
     }
     set(&mut p.rest_scale, c.rest_scale);
@@ -374,19 +376,7 @@ pub fn solver(
             // makehuman-dress-walk); it is worn at its modelled size unless the scene says.
             p.rest_scale = scene.cloth.rest_scale.unwrap_or(1.0);
             let model = model(&p)?;
-            let c = &scene.cloth;
-            let x = XpbdParams {
-                substep: c.xpbd_substep,
-                iterations: c.xpbd_iterations,
-                stretch_compliance: c.stretch_compliance,
-                bend_compliance: c.bend_compliance,
-                static_friction: c.static_friction,
-                bending: match c.xpbd_bending {
-                    XpbdBendingName::Dihedral => XpbdBending::Dihedral,
-                    XpbdBendingName::Springs => XpbdBending::Springs,
-                },
-            };
-            Box::new(XpbdSim::new(model, p, x))
+            Box::new(XpbdSim::new(model, p, scene.cloth.xpbd.clone()))
         }
         SolverName::Vbd => {
             let mut p = cloth_params(scene, garment)?;
@@ -395,31 +385,19 @@ pub fn solver(
             let c = &scene.cloth;
             let fx = &scene.effects;
             let contact = self_contact_on(fx, wear.len());
-            let v = VbdParams {
-                substep: c.vbd_substep,
-                iterations: c.vbd_iterations,
-                stretch: c.vbd_stretch,
-                bend: c.vbd_flexion,
-                dihedral: c.vbd_dihedral,
-                contact: c.vbd_contact,
-                swept: c.vbd_swept,
-                pokes: c.vbd_pokes,
-                limit: c.vbd_limit,
-                limit_passes: c.vbd_limit_passes,
-                self_contact: contact.then(|| SelfParams {
-                    thickness: c.self_thickness,
-                    friction: fx.friction,
-                    broad: match c.self_broad_phase {
-                        BroadPhaseName::Tree => BroadPhase::Tree,
-                        BroadPhaseName::Hash => BroadPhase::Hash,
-                    },
-                    within: fx.self_collision,
-                    between: fx.cloth_collision,
-                    ..SelfParams::default()
-                }),
-                ..VbdParams::default()
-            };
-            Box::new(VbdSim::new(model, p, v, c.thickness))
+            let self_params = contact.then(|| SelfParams {
+                thickness: c.self_thickness,
+                friction: fx.friction,
+                broad: match c.self_broad_phase {
+                    BroadPhaseName::Tree => BroadPhase::Tree,
+                    BroadPhaseName::Hash => BroadPhase::Hash,
+                },
+                within: fx.self_collision,
+                between: fx.cloth_collision,
+                ..SelfParams::default()
+            });
+            let v = VbdSim::new(model, p, c.vbd.clone(), c.thickness);
+            Box::new(v.with_self_contact(self_params))
         }
     })
 }
@@ -439,7 +417,7 @@ pub fn cloth_sim(
 
 /// The scene's integrator for P1's solver.
 fn integrator(scene: &Scene) -> IntegratorKind {
-    match scene.cloth.integrator {
+    match scene.cloth.p1.integrator {
         IntegratorName::Rk4 => IntegratorKind::Rk4,
         IntegratorName::SymplecticEuler => IntegratorKind::SymplecticEuler,
         IntegratorName::ImplicitEuler => IntegratorKind::ImplicitEuler,
@@ -457,12 +435,63 @@ pub fn collider(
     Ok(match method {
         CollisionMethod::NearestVertex => Box::new(NearestVertexCollider::new(body, thickness)?),
         CollisionMethod::Exact => Box::new(ExactCollider::new(body, thickness)?),
-        CollisionMethod::Sdf => Box::new(SdfCollider::new(body, thickness, fx.sdf_resolution)?),
-        CollisionMethod::DepthMaps => {
-            Box::new(DepthMapCollider::new(body, thickness, fx.depth_resolution)?)
-        }
+        CollisionMethod::Sdf => Box::new(SdfCollider::new(body, thickness, fx.sdf.resolution)?),
+        CollisionMethod::DepthMaps => Box::new(DepthMapCollider::new(
+            body,
+            thickness,
+            fx.depth_maps.resolution,
+        )?),
         CollisionMethod::None => Box::new(NoCollider),
     })
+}
+
+/// What the scene asks of a collider (`which`: the "body" or the "fine" one) that it lacks, as
+/// warnings naming the key that then does nothing.
+pub fn lacking(
+    scene: &Scene,
+    collider: Option<(&'static str, Capabilities)>,
+    which: &str,
+) -> Vec<String> {
+    let Some((name, has)) = collider else {
+        return Vec::new();
+    };
+    let vbd = scene.cloth.solver == SolverName::Vbd;
+    let asks: &[(bool, Capabilities, &str)] = match which {
+        "body" => &[
+            (
+                vbd && scene.cloth.vbd.swept,
+                Capabilities {
+                    sweep: true,
+                    ..Capabilities::NONE
+                },
+                "[cloth.vbd] swept",
+            ),
+            (
+                vbd && scene.cloth.vbd.pokes,
+                Capabilities {
+                    pokes: true,
+                    ..Capabilities::NONE
+                },
+                "[cloth.vbd] pokes",
+            ),
+        ],
+        _ => &[(
+            scene.effects.fine_pokes,
+            Capabilities {
+                pokes: true,
+                ..Capabilities::NONE
+            },
+            "[effects] fine_pokes",
+        )],
+    };
+    asks.iter()
+        .filter(|(on, _, _)| *on)
+        .flat_map(|(_, wanted, key)| {
+            has.missing(*wanted).into_iter().map(move |lack| {
+                format!("the {which} collider `{name}` has no {lack}: {key} does nothing with it")
+            })
+        })
+        .collect()
 }
 
 /// Whether the cloth keeps apart from itself: its own pieces (`self_collision`), or several

@@ -6,9 +6,7 @@
 use crate::build::AssembleError;
 use crate::scene::Scene;
 use crate::wardrobe::Dressed;
-use parry3d_f64::math::{Point, Vector};
-use parry3d_f64::query::{Ray, RayCast};
-use parry3d_f64::shape::Triangle;
+pub use fold::Miss;
 use std::path::Path;
 use tryon_core::math::{Real, Vec3};
 use tryon_core::mesh::PolyMesh;
@@ -20,24 +18,6 @@ pub struct Canvas {
     pub camera: Camera,
     pub width: u32,
     pub height: u32,
-}
-
-/// Why a drawn pixel gives no point on the garment.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Miss {
-    /// The ray through it meets no garment triangle.
-    NoGarment,
-    /// The body is in front of the garment there.
-    Hidden,
-}
-
-impl Miss {
-    pub fn describe(self) -> &'static str {
-        match self {
-            Miss::NoGarment => "shows no garment (the ray through it misses the garment)",
-            Miss::Hidden => "shows the body in front of the garment",
-        }
-    }
 }
 
 impl Canvas {
@@ -76,12 +56,7 @@ impl Canvas {
         garment: (&[Vec3], &[[u32; 3]]),
     ) -> Result<Vec3, Miss> {
         let (eye, dir) = self.camera.ray(pixel[0], pixel[1], self.width, self.height);
-        let ray = Ray::new(Point::from(eye), Vector::from(dir));
-        let hit = nearest_hit(&ray, garment).ok_or(Miss::NoGarment)?;
-        match nearest_hit(&ray, body) {
-            Some(b) if b < hit => Err(Miss::Hidden),
-            _ => Ok(eye + dir * hit),
-        }
+        fold::land(eye, dir, body, garment)
     }
 
     /// The canvas picture: the body and the garment, shaded as the preview shades them.
@@ -102,16 +77,6 @@ impl Canvas {
         ];
         render(&meshes, &self.camera, self.width, self.height)
     }
-}
-
-/// Distance along `ray` to the nearest of the triangles, either side facing.
-fn nearest_hit(ray: &Ray, (x, tris): (&[Vec3], &[[u32; 3]])) -> Option<Real> {
-    tris.iter()
-        .filter_map(|t| {
-            let [a, b, c] = t.map(|v| Point::from(x[v as usize]));
-            Triangle::new(a, b, c).cast_local_ray(ray, Real::MAX, true)
-        })
-        .min_by(|a, b| a.total_cmp(b))
 }
 
 /// The canvas of `scene` (the body dressed and draped, before any fold) and its picture.

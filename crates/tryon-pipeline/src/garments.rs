@@ -59,10 +59,10 @@ fn shirt(m: &tryon_core::measure::Measurements, g: &ShirtSpec) -> Result<PolyMes
     // A heavy figure's mannequin has its arms through its sides in the A-pose: a shirt cut from it
     // crosses itself there and tears at the first frame.
     let (tris, _) = mesh.triangulate();
-    let crossing = crate::crossings::crossings(&mesh.positions, &tris).len();
+    let crossing = body_collide::crossings::crossings(&mesh.positions, &tris).len();
     if crossing > 0 {
         let (body_tris, _) = man.mesh.triangulate();
-        let body = crate::crossings::crossings(&man.mesh.positions, &body_tris).len();
+        let body = body_collide::crossings::crossings(&man.mesh.positions, &body_tris).len();
         return Err(PatternError::Cut(format!(
             "the shirt crosses itself in {crossing} triangle pairs (the mannequin of these \
              measurements crosses itself in {body}: its arms pass into its sides, so the \

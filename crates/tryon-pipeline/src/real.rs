@@ -199,8 +199,8 @@ pub struct BodySkin<'a> {
 }
 
 /// `body` with its parts pressed apart where they meet (`[effects] body_press`), keeping `gap`
-/// between them. Parts are the limbs and the head, each from its first joint down (the rest is
-/// the torso); a vertex belongs to the part of its strongest joint. A skeleton whose roles are not
+/// between them: the parts are the limbs and the head, found by their joints' roles in the
+/// skeleton (`Press::parts_from_roots` assigns the vertices). A skeleton whose roles are not
 /// recognised is left as it is.
 pub fn pressed(mut body: SkinnedBody, gap: Real) -> SkinnedBody {
     let Some(map) = RoleMap::detect(&body.skeleton) else {
@@ -214,30 +214,12 @@ pub fn pressed(mut body: SkinnedBody, gap: Real) -> SkinnedBody {
         Role::Neck,
     ]
     .map(|r| map.get(r));
-    let s = &body.skeleton;
-    let part_of_joint: Vec<u8> = (0..s.parents.len())
-        .map(|mut j| {
-            loop {
-                if let Some(k) = roots.iter().position(|r| *r == Some(j)) {
-                    break k as u8 + 1;
-                }
-                match s.parents[j] {
-                    Some(p) => j = p,
-                    None => break 0,
-                }
-            }
-        })
-        .collect();
-    let parts = body
-        .skin
-        .joints
-        .iter()
-        .zip(&body.skin.weights)
-        .map(|(j, w)| {
-            let k = (0..4).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap_or(0);
-            part_of_joint.get(j[k] as usize).copied().unwrap_or(0)
-        })
-        .collect();
+    let parts = Press::parts_from_roots(
+        &body.skeleton,
+        &body.skin.joints,
+        &body.skin.weights,
+        &roots,
+    );
     body.press = Some(Press { parts, gap });
     body
 }

@@ -438,7 +438,7 @@ impl Pipeline {
             (
                 penetration_of(&signed, &ctx.start_distances),
                 stretch(&ctx.info.edges, &ctx.info.rest, coarse_x),
-                crate::crossings::judge(output, &ctx.garment_triangles),
+                body_collide::crossings::judge(output, &ctx.garment_triangles),
             )
         });
         let m = &mut stats.metrics;

@@ -21,8 +21,8 @@ pub use schema::{
     SceneSection, ShirtSpec, SkirtSpec, SphereBody, SquareSpec, StillSpec, WalkSpec, WearSpec,
 };
 pub use sections::{
-    BroadPhaseName, ClothSection, CollisionMethod, EffectsSection, OutputSection, SolverName,
-    XpbdBendingName,
+    BroadPhaseName, ClothSection, CollisionMethod, EffectsSection, OutputSection, P1Section,
+    SolverName,
 };
 
 /// Why a scene file was rejected.
@@ -258,18 +258,25 @@ impl Scene {
                 .ok()
                 .and_then(|mut v| v.remove("v"))
                 .unwrap_or_else(|| toml::Value::String(value.to_string()));
-            let entry = table
-                .entry(t.to_string())
-                .or_insert_with(|| toml::Value::Table(toml::Table::new()));
-            let toml::Value::Table(section) = entry else {
-                return Err(match entry {
-                    toml::Value::Array(_) => bad(&format!(
-                        "a key of a single table: the [[{t}]] list is set in the scene file"
-                    )),
-                    _ => bad("a key inside a [table]"),
-                });
-            };
-            section.insert(k.to_string(), parsed);
+            // `cloth.vbd.substep`: every part but the last names a table, made if absent.
+            let mut path: Vec<&str> = k.split('.').map(str::trim).collect();
+            let last = path.pop().unwrap_or_default();
+            let mut section = &mut table;
+            for (depth, part) in std::iter::once(t).chain(path).enumerate() {
+                let entry = section
+                    .entry(part.to_string())
+                    .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+                section = match entry {
+                    toml::Value::Table(s) => s,
+                    toml::Value::Array(_) if depth == 0 => {
+                        return Err(bad(&format!(
+                            "a key of a single table: the [[{t}]] list is set in the scene file"
+                        )));
+                    }
+                    _ => return Err(bad("a key inside a [table]")),
+                };
+            }
+            section.insert(last.to_string(), parsed);
         }
         let merged = toml::to_string(&table).map_err(|e| SceneError::Syntax {
             file: file.to_path_buf(),

@@ -34,7 +34,7 @@ pub struct Metrics {
     /// Smallest structural edge length / rest length over all frames.
     pub min_stretch: Real,
     /// Largest share, over frames, of garment vertices detached from the body (torn, slid or
-    /// fallen off; `crate::hold`): 0 while the garment stays on.
+    /// fallen off; `body_collide::hold`): 0 while the garment stays on.
     pub detached_share: Real,
     /// Mean over frames of the mean structural stretch.
     pub mean_stretch: Real,
@@ -136,7 +136,7 @@ pub struct FrameStats {
     pub max_penetration_m: Real,
     pub p99_penetration_m: Real,
     pub max_stretch: Real,
-    /// Share of garment vertices detached from the body (`crate::hold`).
+    /// Share of garment vertices detached from the body (`body_collide::hold`).
     pub detached_share: Real,
     /// Crossing pairs of garment triangles.
     pub cloth_intersections: usize,

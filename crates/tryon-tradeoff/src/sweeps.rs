@@ -91,7 +91,7 @@ fn collider_sweep(quick: bool, log: &mut String) -> Result<Vec<ColliderPoint>, S
                 format!("sdf {r}"),
                 vec![
                     "effects.body_collision=\"sdf\"".into(),
-                    format!("effects.sdf_resolution={r}"),
+                    format!("effects.sdf.resolution={r}"),
                 ],
             ));
         }
@@ -100,7 +100,7 @@ fn collider_sweep(quick: bool, log: &mut String) -> Result<Vec<ColliderPoint>, S
                 format!("depth_maps {r}"),
                 vec![
                     "effects.body_collision=\"depth_maps\"".into(),
-                    format!("effects.depth_resolution={r}"),
+                    format!("effects.depth_maps.resolution={r}"),
                 ],
             ));
         }
@@ -497,7 +497,7 @@ fn guard_sweep(quick: bool, log: &mut String) -> Result<Vec<GuardPoint>, String>
     for (label, guard) in [("1.1 (default)", 1.1), ("1.2", 1.2), ("off", 0.0)] {
         let sets = vec![
             "cloth.solver=\"p1\"".to_string(),
-            format!("cloth.stretch_guard={guard}"),
+            format!("cloth.p1.stretch_guard={guard}"),
         ];
         let (s, _) = run_scene("demo-dress-walk.toml", &sets, frames)?;
         let m = &s.metrics;

@@ -532,4 +532,6 @@ impl Detail {
 }
 
 #[cfg(test)]
+mod poke_tests;
+#[cfg(test)]
 mod tests;

@@ -261,6 +261,14 @@ impl Collider for NearestVertexCollider {
     fn name(&self) -> &'static str {
         "nearest_vertex"
     }
+    fn capabilities(&self) -> tryon_core::stages::Capabilities {
+        tryon_core::stages::Capabilities {
+            pinch: true,
+            sweep: true,
+            pokes: true,
+            ..tryon_core::stages::Capabilities::NONE
+        }
+    }
 
     fn update(&mut self, frame: &BodyFrame) {
         // A body that did not move keeps its shape-derived caches.

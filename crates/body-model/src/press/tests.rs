@@ -129,3 +129,32 @@ fn the_parts_around_a_cell_are_those_of_its_27_cells() {
         assert_eq!(*m, slow, "cell {at:?}");
     }
 }
+
+#[test]
+fn a_vertex_takes_the_part_of_its_strongest_joint_from_the_root_down() {
+    // root 0 -> spine 1 -> arm 2 -> hand 3; root 0 -> leg 4. Roots: the arm (part 1), the leg (2).
+    let skeleton = Skeleton {
+        names: ["root", "spine", "arm", "hand", "leg"]
+            .map(String::from)
+            .to_vec(),
+        parents: vec![None, Some(0), Some(1), Some(2), Some(0)],
+        rest_offsets: vec![Vec3::zeros(); 5],
+    };
+    let joints = [
+        [3, 1, 0, 0],
+        [1, 2, 0, 0],
+        [2, 4, 0, 0],
+        [4, 0, 0, 0],
+        [9, 0, 0, 0],
+    ];
+    let weights = [
+        [0.6, 0.4, 0.0, 0.0],
+        [0.7, 0.3, 0.0, 0.0],
+        [0.2, 0.8, 0.0, 0.0],
+        [1.0, 0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0, 0.0],
+    ];
+    let parts = Press::parts_from_roots(&skeleton, &joints, &weights, &[Some(2), Some(4)]);
+    // The hand is below the arm; the spine is torso; a joint the skeleton lacks is torso too.
+    assert_eq!(parts, vec![1, 0, 2, 2, 0]);
+}

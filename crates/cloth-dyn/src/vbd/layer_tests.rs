@@ -19,6 +19,9 @@ impl Collider for Bar {
     fn name(&self) -> &'static str {
         "test bar"
     }
+    fn capabilities(&self) -> tryon_core::stages::Capabilities {
+        tryon_core::stages::Capabilities::NONE
+    }
     fn update(&mut self, _body: &tryon_core::frames::BodyFrame) {}
     fn resolve(&mut self, points: &mut [Vec3], contacts: &mut Vec<Contact>) {
         // Out of the bar: out of the circle around its axis in the point's own plane.
@@ -31,11 +34,8 @@ impl Collider for Bar {
     }
 }
 
-fn layers(on: bool) -> VbdParams {
-    VbdParams {
-        self_contact: on.then(SelfParams::default),
-        ..VbdParams::default()
-    }
+fn layers(on: bool) -> Option<SelfParams> {
+    on.then(SelfParams::default)
 }
 
 /// Worst crossing count over the frames and whether the state stayed finite.
@@ -67,7 +67,8 @@ fn sheet_over_bar(on: bool) -> (usize, bool) {
     let mesh = grid_xz(30, 15, 0.6, 0.3, 0.02);
     let params = ClothParams::default();
     let model = ClothModel::build(&mesh, &params, vec![]).unwrap();
-    let mut s = VbdSim::new(model, params, layers(on), 0.002);
+    let mut s =
+        VbdSim::new(model, params, VbdParams::default(), 0.002).with_self_contact(layers(on));
     let kick = |p: &Vec3| Vec3::new(if p.x < -0.05 { 3.0 } else { 0.0 }, 0.0, 0.0);
     run(&mut s, (90, 1.0 / 30.0), &mut Bar { r: 0.005 }, kick)
 }
@@ -134,7 +135,8 @@ fn twisted_tube(on: bool) -> (usize, bool) {
         ..ClothParams::default()
     };
     let model = ClothModel::build(&mesh, &params, handles).unwrap();
-    let mut s = VbdSim::new(model, params, layers(on), 0.002);
+    let mut s =
+        VbdSim::new(model, params, VbdParams::default(), 0.002).with_self_contact(layers(on));
     run(&mut s, (75, 1.0 / 30.0), &mut NoCollider, |_| Vec3::zeros())
 }
 

@@ -39,49 +39,47 @@ use tryon_core::frames::{CoarseFrame, Contact, StepReport};
 use tryon_core::math::{Mat3, Real, Vec3, is_finite};
 use tryon_core::stages::{ClothInfo, ClothSolver, Collider, Probe};
 
-/// The VBD solver's own settings.
-#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+/// The `vbd` solver's settings, a scene's `[cloth.vbd]` (self-contact: `with_self_contact`).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields, default)]
 pub struct VbdParams {
     /// Longest step (s); a frame takes as many as it needs to keep under it.
+    #[schemars(range(min = 1e-5, max = 0.1))]
     pub substep: Real,
     /// Descent sweeps over all vertices per step.
+    #[schemars(range(min = 1, max = 1000))]
     pub iterations: u32,
     /// Stretch and shear stiffness per spring (N/m times rest length: k = this / rest).
+    #[schemars(range(min = 1.0, max = 1e9))]
     pub stretch: Real,
-    /// Flexion spring stiffness (same units): P1's bending, a spring across each pair of faces;
-    /// 0 leaves them out.
+    /// Flexion springs (P1's bending), stiffness in N/m times rest length; 0 leaves them out.
+    #[serde(rename = "flexion")]
+    #[schemars(range(min = 0.0, max = 1e6))]
     pub bend: Real,
-    /// Bending rigidity (N m) of the hinges toward the rest dihedral angles (`bending.rs`); 0
-    /// (the default) leaves them out. A modelled garment then keeps the side of its folds and
-    /// curves; no scene uses it (with it the elegant suit's collar caught under the chin in more
-    /// runs, docs/decisions, *vbd bending*).
+    /// Bending rigidity (N m) toward the rest dihedral angles, so a modelled garment keeps its
+    /// curves and a fold its side; 0 leaves it out (docs/decisions, *vbd bending*).
+    #[schemars(range(min = 0.0, max = 1.0))]
     pub dihedral: Real,
-    /// Contact stiffness (N/m). It must dominate the springs a particle hangs from: at 1e4 the
-    /// stretch springs (5e3 / 2 cm = 2.5e5 N/m on a MakeHuman garment) dragged sleeves into the
-    /// arms (85 mm on makehuman-dress-walk); at 1e6, 41 mm at worst, p99 3.3 mm.
+    /// Body contact stiffness (N/m); it must dominate the springs a particle hangs from.
+    #[schemars(range(min = 1.0, max = 1e9))]
     pub contact: Real,
     /// Slip speed below which friction sticks (m/s): IPC's eps_v.
+    #[schemars(range(min = 1e-6, max = 1.0))]
     pub stick_speed: Real,
-    /// Particles nearer the body than the thickness plus this at the start of a step (m) get a
-    /// contact plane for the step. 1 cm let the demo's thigh pass through the skirt when the body
-    /// moved in sub-frames (40.7 mm); 3 cm keeps it at 1.3 mm, and 6 cm is no better.
+    /// Particles nearer the body than the thickness plus this get a contact plane for a step (m).
+    #[schemars(range(min = 0.0, max = 0.2))]
     pub reach: Real,
-    /// Swept body collision after each step (the collider's `sweep`): a particle whose path
-    /// crosses the body inward is stopped on the surface it hit, and held there by a second
-    /// contact plane in the next step.
+    /// Swept body collision: a particle whose path crosses the body's surface inward is stopped.
     pub swept: bool,
-    /// Provot's strain limit after the sweeps, a ratio of rest length (0: off). On a free-hanging
-    /// sheet it holds the stretch the sweeps leave; on garments pressed to a body it fights the
-    /// contact planes and made every real run worse (docs/decisions, *vbd strain limit*), so it is off by default.
+    /// Provot's strain limit after the sweeps, 0 (off) or a ratio of rest length in [1, 2], for
+    /// free-hanging sheets (docs/decisions, *vbd strain limit*).
     pub limit: Real,
     /// Passes of that limit per step.
+    #[schemars(range(min = 1, max = 100))]
     pub limit_passes: u32,
-    /// Body vertices under cloth triangles held 1 mm behind the cloth (`pokes.rs`). Off by
-    /// default: it stops the skin showing through the coarse cloth, but with it the elegant
-    /// suit's collar caught under the chin in more runs (docs/decisions, *fine pokes*).
+    /// Body vertices under cloth triangles held 1 mm behind the cloth, so narrow features do
+    /// not poke through between particles (off: docs/decisions, *fine pokes*).
     pub pokes: bool,
-    /// The cloth's contact with itself (`crate::self_contact`); `None` leaves it out.
-    pub self_contact: Option<SelfParams>,
 }
 
 impl Default for VbdParams {
@@ -99,7 +97,6 @@ impl Default for VbdParams {
             limit: 0.0,
             limit_passes: 8,
             pokes: false,
-            self_contact: None,
         }
     }
 }
@@ -174,7 +171,7 @@ pub struct VbdSim {
     /// Body vertices under cloth triangles, found at the first step of each frame.
     pokes: pokes::Pokes,
     pokes_stale: bool,
-    /// The cloth's contacts with itself (`vbd.self_contact`), and what untangling the starting
+    /// The cloth's contacts with itself (`with_self_contact`), and what untangling the starting
     /// shape did (`None` until the first step).
     layers: Option<SelfContacts>,
     untangled: Option<crate::self_contact::Untangled>,
@@ -236,9 +233,6 @@ impl VbdSim {
         bending::add_stencil_neighbours(&stencils, &blocks, &mut neighbours);
         let (order, colours) = colour::vertices(&neighbours);
         let spring_sum = lists.iter().map(|l| l.iter().map(|a| a.k).sum()).collect();
-        let layers = vbd.self_contact.map(|p| {
-            SelfContacts::new(&model.triangles, rest, p).with_garments(&model.garment, &model.layer)
-        });
         let z = vec![Vec3::zeros(); n];
         VbdSim {
             model,
@@ -274,9 +268,19 @@ impl VbdSim {
             limit_planes: Vec::new(),
             pokes: pokes::Pokes::default(),
             pokes_stale: true,
-            layers,
+            layers: None,
             untangled: None,
         }
+    }
+
+    /// The solver with the cloth's contact with itself and between its garments (`None`: none).
+    pub fn with_self_contact(mut self, contact: Option<SelfParams>) -> Self {
+        let m = &self.model;
+        self.layers = contact.map(|p| {
+            SelfContacts::new(&m.triangles, &m.rest_positions, p)
+                .with_garments(&m.garment, &m.layer)
+        });
+        self
     }
 
     /// Number of vertex colours.
@@ -590,5 +594,7 @@ impl ClothSolver for VbdSim {
 
 #[cfg(test)]
 mod layer_tests;
+#[cfg(test)]
+mod poke_tests;
 #[cfg(test)]
 mod tests;

@@ -27,27 +27,47 @@ use tryon_core::frames::{CoarseFrame, Contact, StepReport};
 use tryon_core::math::{Real, Vec3, is_finite};
 use tryon_core::stages::{ClothInfo, ClothSolver, Collider};
 
-/// The XPBD solver's own settings.
-#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+/// The `xpbd` solver's settings, as a scene's `[cloth.xpbd]` table gives them (absent keys take
+/// these defaults).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields, default)]
 pub struct XpbdParams {
     /// Longest substep (s); a frame takes as many as it needs to keep under it.
+    #[schemars(range(min = 1e-5, max = 0.1))]
     pub substep: Real,
     /// Constraint passes per substep (Macklin et al.: many substeps of one pass converge better
     /// than few of many).
+    #[schemars(range(min = 1, max = 100))]
     pub iterations: u32,
     /// Compliance of the distance constraints, per unit of rest length (m/N): 0 is inextensible.
+    #[schemars(range(min = 0.0, max = 1.0))]
     pub stretch_compliance: Real,
     /// Compliance of the dihedral constraints (1/(N m)): larger bends more easily.
+    #[schemars(range(min = 0.0, max = 1e9))]
     pub bend_compliance: Real,
-    /// Static friction: a contact sticks while its tangential slip is under this times its
-    /// normal correction.
+    /// Static friction at body contacts: a contact sticks while its tangential slip is under
+    /// this times its normal correction (kinetic friction is `effects.friction`).
+    #[schemars(range(min = 0.0, max = 5.0))]
     pub static_friction: Real,
-    /// What bends the cloth: dihedral angles toward the rest shape's, or the model's bend springs.
+    /// What bends the cloth: `dihedral` (angles toward the rest shape's, at `bend_compliance`)
+    /// or `springs` (the model's bend springs, P3's, each at its own stiffness `cloth.k_bend`,
+    /// changed where folds are drawn).
     pub bending: XpbdBending,
 }
 
 /// How the XPBD solver bends the cloth.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    serde::Serialize,
+    serde::Deserialize,
+    schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
 pub enum XpbdBending {
     /// A dihedral-angle constraint on every interior edge (compliance `bend_compliance`).
     #[default]

@@ -314,6 +314,9 @@ impl Collider for TestPlane {
     fn name(&self) -> &'static str {
         "test plane"
     }
+    fn capabilities(&self) -> tryon_core::stages::Capabilities {
+        tryon_core::stages::Capabilities::NONE
+    }
     fn update(&mut self, _body: &tryon_core::frames::BodyFrame) {}
     fn resolve(&mut self, points: &mut [Vec3], contacts: &mut Vec<Contact>) {
         for (k, p) in points.iter_mut().enumerate() {

@@ -187,7 +187,7 @@ pub fn wear_on(
         &scene.effects,
     )
     .map_err(|e| build_err("the body collider")(e.to_string()))?;
-    let crossings = |p: &[Vec3]| crate::crossings::crossings(p, &base.triangles).len();
+    let crossings = |p: &[Vec3]| body_collide::crossings::crossings(p, &base.triangles).len();
     let start_crossings = crossings(&folded.start);
     let clock = Instant::now();
     let mut frame = CoarseFrame::at_rest(folded.start);

@@ -34,7 +34,7 @@ fn within_ranges(
     (text, file, nth): (&str, &Path, usize),
 ) -> Result<(), SceneError> {
     for k in keys.iter().filter(|k| which(k)) {
-        let Some(table) = v.get(k.table.as_str()) else {
+        let Some(table) = k.table.split('.').try_fold(v, |v, part| v.get(part)) else {
             continue;
         };
         let holder = match &k.kind {
@@ -230,36 +230,36 @@ impl Scene {
             }
         }
         let c = &self.cloth;
-        if let Some(x) = c.max_strain
+        if let Some(x) = c.p1.max_strain
             && !(x == 0.0 || (x.is_finite() && (1.0..=2.0).contains(&x)))
         {
             return Err(bad(
                 text,
                 file,
-                "cloth",
+                "cloth.p1",
                 "max_strain",
                 x.to_string(),
                 "0 (off) or a ratio in [1, 2]",
             ));
         }
-        let x = c.vbd_limit;
+        let x = c.vbd.limit;
         if !(x == 0.0 || (x.is_finite() && (1.0..=2.0).contains(&x))) {
             return Err(bad(
                 text,
                 file,
-                "cloth",
-                "vbd_limit",
+                "cloth.vbd",
+                "limit",
                 x.to_string(),
                 "0 (off) or a ratio in [1, 2]",
             ));
         }
-        if let Some(x) = c.stretch_guard
+        if let Some(x) = c.p1.stretch_guard
             && !(x == 0.0 || (x.is_finite() && x > 1.0 && x <= 10.0))
         {
             return Err(bad(
                 text,
                 file,
-                "cloth",
+                "cloth.p1",
                 "stretch_guard",
                 x.to_string(),
                 "0 (off) or a ratio in (1, 10]",

@@ -146,8 +146,14 @@ fn keys_of(table: &str, kind: Option<&str>, s: &Value, defs: &Value) -> Vec<Key>
         .flatten()
         .filter_map(Value::as_str)
         .collect();
-    let mut out = Vec::new();
+    let (mut out, mut nested) = (Vec::new(), Vec::new());
     for (name, p) in s["properties"].as_object().into_iter().flatten() {
+        // A table inside the table (`[cloth.vbd]`): its keys follow the table's own.
+        let sub = resolve(p, defs);
+        if kind.is_none() && sub["properties"].is_object() {
+            nested.extend(keys_of(&format!("{table}.{name}"), None, sub, defs));
+            continue;
+        }
         let items = &p["items"];
         let per_item =
             items.is_object() && (items.get("minimum").is_some() || items.get("maximum").is_some());
@@ -182,6 +188,7 @@ fn keys_of(table: &str, kind: Option<&str>, s: &Value, defs: &Value) -> Vec<Key>
             description: p["description"].as_str().unwrap_or("").replace('\n', " "),
         });
     }
+    out.extend(nested);
     out
 }
 
@@ -225,7 +232,10 @@ fn describe(table: &str, kind: Option<&str>) -> String {
     }
     let r = root();
     let defs = &r["$defs"];
-    let t = resolve(&r["properties"][table], defs);
+    let mut t = &r;
+    for part in table.split('.') {
+        t = resolve(&t["properties"][part], defs);
+    }
     let d = match kind {
         None => &t["description"],
         Some(k) => t["oneOf"]

@@ -18,6 +18,21 @@ const TABLES: [&str; 9] = [
 fn located(e: toml::de::Error, text: &str, file: &Path, table: &str) -> SceneError {
     let (line, column) = e.span().map_or((0, 0), |s| line_col(text, s.start));
     let mut message = e.message().to_string();
+    // A table inside the table (`[cloth.vbd]`) names its keys by its whole path.
+    let header = text
+        .lines()
+        .take(line)
+        .filter_map(|l| {
+            let l = l.split('#').next().unwrap_or("").trim();
+            l.strip_prefix('[').and_then(|s| s.strip_suffix(']'))
+        })
+        .last()
+        .map(|h| h.trim_matches(['[', ']']).trim().to_string());
+    let table = match header {
+        Some(h) if h.starts_with(&format!("{table}.")) => h,
+        _ => table.to_string(),
+    };
+    let table = table.as_str();
     let key = text
         .lines()
         .nth(line.wrapping_sub(1))
@@ -82,6 +97,66 @@ fn table_of<'i>(
     }
 }
 
+/// Keys that moved into a table of their own: (table, old key, new table, new key).
+pub(super) const MOVED: [(&str, &str, &str, &str); 23] = [
+    ("cloth", "integrator", "cloth.p1", "integrator"),
+    ("cloth", "substep", "cloth.p1", "substep"),
+    ("cloth", "max_strain", "cloth.p1", "max_strain"),
+    (
+        "cloth",
+        "strain_iterations",
+        "cloth.p1",
+        "strain_iterations",
+    ),
+    ("cloth", "stretch_guard", "cloth.p1", "stretch_guard"),
+    ("cloth", "xpbd_substep", "cloth.xpbd", "substep"),
+    ("cloth", "xpbd_iterations", "cloth.xpbd", "iterations"),
+    (
+        "cloth",
+        "stretch_compliance",
+        "cloth.xpbd",
+        "stretch_compliance",
+    ),
+    ("cloth", "bend_compliance", "cloth.xpbd", "bend_compliance"),
+    ("cloth", "static_friction", "cloth.xpbd", "static_friction"),
+    ("cloth", "xpbd_bending", "cloth.xpbd", "bending"),
+    ("cloth", "vbd_substep", "cloth.vbd", "substep"),
+    ("cloth", "vbd_iterations", "cloth.vbd", "iterations"),
+    ("cloth", "vbd_stretch", "cloth.vbd", "stretch"),
+    ("cloth", "vbd_flexion", "cloth.vbd", "flexion"),
+    ("cloth", "vbd_dihedral", "cloth.vbd", "dihedral"),
+    ("cloth", "vbd_contact", "cloth.vbd", "contact"),
+    ("cloth", "vbd_swept", "cloth.vbd", "swept"),
+    ("cloth", "vbd_pokes", "cloth.vbd", "pokes"),
+    ("cloth", "vbd_limit", "cloth.vbd", "limit"),
+    ("cloth", "vbd_limit_passes", "cloth.vbd", "limit_passes"),
+    ("effects", "sdf_resolution", "effects.sdf", "resolution"),
+    (
+        "effects",
+        "depth_resolution",
+        "effects.depth_maps",
+        "resolution",
+    ),
+];
+
+/// An error naming the new place of a key that moved into a table of its own.
+fn moved(text: &str, file: &Path, name: &str, table: &DeTable<'_>) -> Result<(), SceneError> {
+    for key in table.keys() {
+        let k: &str = key.get_ref().as_ref();
+        if let Some((_, _, to, new)) = MOVED.iter().find(|m| m.0 == name && m.1 == k) {
+            return Err(invalid(
+                text,
+                file,
+                key.span().start,
+                &format!("{name}.{k}"),
+                "a key of the old flat table".into(),
+                format!("`{new}` in the [{to}] table (`--set {to}.{new}=...`)"),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// A plain table.
 fn plain<T: DeserializeOwned>(
     text: &str,
@@ -90,6 +165,7 @@ fn plain<T: DeserializeOwned>(
     value: Spanned<DeValue<'_>>,
 ) -> Result<T, SceneError> {
     let (span, table) = table_of(text, file, name, value)?;
+    moved(text, file, name, &table)?;
     T::deserialize(Deserializer::from(Spanned::new(span, table)))
         .map_err(|e| located(e, text, file, name))
 }

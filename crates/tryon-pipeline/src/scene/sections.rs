@@ -8,19 +8,15 @@ use serde::{Deserialize, Serialize};
 use tryon_core::math::Real;
 
 /// Cloth material and solver settings; absent values take the material preset's, scaled to the
-/// garment's resolution.
+/// garment's resolution. Each solver's own settings are its table: `[cloth.p1]`, `[cloth.vbd]`,
+/// `[cloth.xpbd]`.
 #[derive(Clone, Debug, Deserialize, Serialize, JsonSchema, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct ClothSection {
     /// The garment solver.
     pub solver: SolverName,
-    /// The coarse cloth's integrator (the `p1` solver).
-    pub integrator: IntegratorName,
     /// The material preset.
     pub material: MaterialName,
-    /// Largest substep (s); the preset's stability bound when absent.
-    #[schemars(range(min = 1e-5, max = 0.1))]
-    pub substep: Option<Real>,
     /// Area density (kg/m^2).
     #[schemars(range(min = 1e-3, max = 10.0))]
     pub density: Real,
@@ -39,6 +35,37 @@ pub struct ClothSection {
     /// Spring damping (N s/m).
     #[schemars(range(min = 0.0, max = 1e9))]
     pub spring_damping: Option<Real>,
+    /// Rest lengths as a share of the modelled ones (below 1 the garment is worn under tension;
+    /// the preset's when absent: 0.95 for .mhclo garments with `p1`, 1 otherwise).
+    #[schemars(range(min = 0.5, max = 1.5))]
+    pub rest_scale: Option<Real>,
+    /// Distance the cloth keeps from the body (m).
+    #[schemars(range(min = 0.0, max = 0.05))]
+    pub thickness: Real,
+    /// Distance the cloth keeps from itself with `effects.self_collision` (m).
+    #[schemars(range(min = 1e-4, max = 0.02))]
+    pub self_thickness: Real,
+    /// How self-contact finds candidate pairs: `tree` (bounding volume hierarchies refitted
+    /// each step) or `hash` (a spatial hash rebuilt each step); the results agree, the tree is
+    /// faster (docs/decisions, *self contact*).
+    pub self_broad_phase: BroadPhaseName,
+    /// The `p1` solver's settings.
+    pub p1: P1Section,
+    /// The `vbd` solver's settings.
+    pub vbd: cloth_dyn::VbdParams,
+    /// The `xpbd` solver's settings.
+    pub xpbd: cloth_dyn::XpbdParams,
+}
+
+/// The `p1` solver's settings (`[cloth.p1]`); absent values take the material preset's.
+#[derive(Clone, Debug, Default, Deserialize, Serialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct P1Section {
+    /// The integrator.
+    pub integrator: IntegratorName,
+    /// Largest substep (s); the preset's stability bound when absent.
+    #[schemars(range(min = 1e-5, max = 0.1))]
+    pub substep: Option<Real>,
     /// Provot's strain limit, a ratio in [1, 2]; 0 turns it off.
     pub max_strain: Option<Real>,
     /// Passes of the strain limit per substep.
@@ -47,74 +74,6 @@ pub struct ClothSection {
     /// Quality guard: a substep that stretches a structural edge past this ratio of its rest
     /// length is retried at half the step, a ratio in (1, 10]; 0 turns it off.
     pub stretch_guard: Option<Real>,
-    /// Rest lengths as a share of the modelled ones (below 1 the garment is worn under tension;
-    /// the preset's when absent: 0.95 for .mhclo garments with `p1`, 1 otherwise).
-    #[schemars(range(min = 0.5, max = 1.5))]
-    pub rest_scale: Option<Real>,
-    /// Distance the cloth keeps from the body (m).
-    #[schemars(range(min = 0.0, max = 0.05))]
-    pub thickness: Real,
-    /// The `xpbd` solver's longest substep (s).
-    #[schemars(range(min = 1e-5, max = 0.1))]
-    pub xpbd_substep: Real,
-    /// The `xpbd` solver's constraint passes per substep.
-    #[schemars(range(min = 1, max = 100))]
-    pub xpbd_iterations: u32,
-    /// The `xpbd` solver's stretch compliance per unit rest length (m/N); 0 is inextensible.
-    #[schemars(range(min = 0.0, max = 1.0))]
-    pub stretch_compliance: Real,
-    /// The `xpbd` solver's bending compliance (1/(N m)): larger bends more easily.
-    #[schemars(range(min = 0.0, max = 1e9))]
-    pub bend_compliance: Real,
-    /// The `xpbd` solver's static friction at body contacts (kinetic friction is
-    /// `effects.friction`).
-    #[schemars(range(min = 0.0, max = 5.0))]
-    pub static_friction: Real,
-    /// What bends the cloth in the `xpbd` solver: `dihedral` (angles toward the rest shape's, at
-    /// `bend_compliance`) or `springs` (the model's bend springs, P3's, each at its own stiffness
-    /// `k_bend`, changed where folds are drawn).
-    pub xpbd_bending: XpbdBendingName,
-    /// The `vbd` solver's longest step (s).
-    #[schemars(range(min = 1e-5, max = 0.1))]
-    pub vbd_substep: Real,
-    /// The `vbd` solver's descent sweeps per step.
-    #[schemars(range(min = 1, max = 1000))]
-    pub vbd_iterations: u32,
-    /// The `vbd` solver's stretch and shear stiffness (N/m times rest length).
-    #[schemars(range(min = 1.0, max = 1e9))]
-    pub vbd_stretch: Real,
-    /// The `vbd` solver's flexion springs (P1's bending: a spring across each pair of faces),
-    /// stiffness in N/m times rest length; 0 leaves them out.
-    #[schemars(range(min = 0.0, max = 1e6))]
-    pub vbd_flexion: Real,
-    /// The `vbd` solver's bending rigidity (N m) toward the rest shape's dihedral angles, so a
-    /// modelled garment keeps its curves and a fold its side; 0 leaves it out.
-    #[schemars(range(min = 0.0, max = 1.0))]
-    pub vbd_dihedral: Real,
-    /// The `vbd` solver's contact stiffness (N/m).
-    #[schemars(range(min = 1.0, max = 1e9))]
-    pub vbd_contact: Real,
-    /// The `vbd` solver's swept (continuous) body collision: a particle whose path in a step
-    /// crosses the body's surface inward is stopped on it, however thin the part.
-    pub vbd_swept: bool,
-    /// The `vbd` solver holds body vertices found under cloth triangles 1 mm behind the
-    /// cloth, so narrow features (a nipple, a shoulder's tip) do not poke through between
-    /// particles. Off by default (docs/decisions, *fine pokes*: with it the elegant suit's collar caught under
-    /// the chin in more runs).
-    pub vbd_pokes: bool,
-    /// The `vbd` solver's strain limit after its sweeps, 0 (off) or a ratio of rest length in
-    /// [1, 2]: holds a free-hanging sheet's stretch (the drape); made garments on a body worse.
-    pub vbd_limit: Real,
-    /// Passes of the `vbd` solver's strain limit per step.
-    #[schemars(range(min = 1, max = 100))]
-    pub vbd_limit_passes: u32,
-    /// Distance the cloth keeps from itself with `effects.self_collision` (m).
-    #[schemars(range(min = 1e-4, max = 0.02))]
-    pub self_thickness: Real,
-    /// How self-contact finds candidate pairs: `tree` (bounding volume hierarchies refitted
-    /// each step) or `hash` (a spatial hash rebuilt each step); the results agree, the tree is
-    /// faster (docs/decisions, *self contact*).
-    pub self_broad_phase: BroadPhaseName,
 }
 
 /// A broad phase of self-contact.
@@ -130,42 +89,22 @@ pub enum BroadPhaseName {
 
 impl Default for ClothSection {
     fn default() -> Self {
-        let xpbd = cloth_dyn::XpbdParams::default();
-        let vbd = cloth_dyn::VbdParams::default();
         ClothSection {
             solver: SolverName::default(),
-            integrator: IntegratorName::default(),
             material: MaterialName::default(),
-            substep: None,
             density: presets::DENSITY,
             k_stretch: None,
             k_compress: None,
             k_shear: None,
             k_bend: None,
             spring_damping: None,
-            max_strain: None,
-            strain_iterations: None,
-            stretch_guard: None,
             rest_scale: None,
             thickness: presets::THICKNESS,
-            xpbd_substep: xpbd.substep,
-            xpbd_iterations: xpbd.iterations,
-            stretch_compliance: xpbd.stretch_compliance,
-            bend_compliance: xpbd.bend_compliance,
-            static_friction: xpbd.static_friction,
-            xpbd_bending: XpbdBendingName::default(),
-            vbd_substep: vbd.substep,
-            vbd_iterations: vbd.iterations,
-            vbd_stretch: vbd.stretch,
-            vbd_flexion: vbd.bend,
-            vbd_dihedral: vbd.dihedral,
-            vbd_contact: vbd.contact,
-            vbd_swept: vbd.swept,
-            vbd_pokes: vbd.pokes,
-            vbd_limit: vbd.limit,
-            vbd_limit_passes: vbd.limit_passes,
             self_thickness: cloth_dyn::self_contact::SelfParams::default().thickness,
             self_broad_phase: BroadPhaseName::default(),
+            p1: P1Section::default(),
+            vbd: cloth_dyn::VbdParams::default(),
+            xpbd: cloth_dyn::XpbdParams::default(),
         }
     }
 }
@@ -190,7 +129,8 @@ impl From<WrinkleModelName> for wrinkle::WrinkleModel {
     }
 }
 
-/// The garment solver. Adding one: a variant here and its arm in `build::solver`.
+/// The garment solver. Adding one: its settings table in [`ClothSection`], a variant here (and
+/// in [`SolverName::ALL`] and its methods) and its arm in `build::solver`.
 #[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, JsonSchema, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
 pub enum SolverName {
@@ -206,15 +146,38 @@ pub enum SolverName {
     Vbd,
 }
 
-/// What bends the cloth in the `xpbd` solver.
-#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, JsonSchema, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
-pub enum XpbdBendingName {
-    /// A dihedral-angle constraint on every interior edge, toward the rest shape's angle.
-    #[default]
-    Dihedral,
-    /// The model's bend springs (P3's and Provot's), as compliant distance constraints.
-    Springs,
+impl SolverName {
+    /// Every solver: the reference, the budget and the tradeoff sweeps take them from here.
+    pub const ALL: [SolverName; 3] = [SolverName::P1, SolverName::Xpbd, SolverName::Vbd];
+
+    /// The name the scene file uses (also its settings table's, `[cloth.NAME]`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            SolverName::P1 => "p1",
+            SolverName::Xpbd => "xpbd",
+            SolverName::Vbd => "vbd",
+        }
+    }
+
+    /// Passes over the cloth per substep, as the budget counts them.
+    pub fn iterations(self, c: &ClothSection) -> usize {
+        match self {
+            SolverName::P1 => 1,
+            SolverName::Xpbd => c.xpbd.iterations as usize,
+            SolverName::Vbd => c.vbd.iterations as usize,
+        }
+    }
+
+    /// What to change when a frame would take too many substeps.
+    pub fn substep_hint(self) -> &'static str {
+        match self {
+            SolverName::P1 => {
+                "P1's stable substep shrinks as the stiffnesses (cloth.k_*) and cloth.spring_damping grow: lower them, or use cloth.solver = \"vbd\" (stable at any stiffness)"
+            }
+            SolverName::Xpbd => "raise cloth.xpbd.substep",
+            SolverName::Vbd => "raise cloth.vbd.substep",
+        }
+    }
 }
 
 /// A way of colliding with the body. Adding one: a variant here and its arm in
@@ -267,12 +230,6 @@ pub struct EffectsSection {
     /// Collider of the fine surface (P1.4.2); the body collider's method when absent (`none` is
     /// not allowed: turn `fine_collision` off instead).
     pub fine_collider: Option<CollisionMethod>,
-    /// Grid cells along the body's longest side for `sdf`.
-    #[schemars(range(min = 8, max = 512))]
-    pub sdf_resolution: usize,
-    /// Pixels along the body's longest side for `depth_maps`.
-    #[schemars(range(min = 16, max = 4096))]
-    pub depth_resolution: usize,
     /// P1.3.4: carry the cloth with the moving body.
     pub follow_body: bool,
     /// Press a skinned body's parts apart where they meet in a pose (an arm against the chest,
@@ -335,6 +292,10 @@ pub struct EffectsSection {
     /// The fine collision also lifts the fine surface over body vertices that poke through
     /// between its vertices (a nipple, a shoulder's tip), `fine_skin` out.
     pub fine_pokes: bool,
+    /// The `sdf` collider's settings (P3's grid).
+    pub sdf: SdfSection,
+    /// The `depth_maps` collider's settings (P4's six views).
+    pub depth_maps: DepthMapsSection,
 }
 
 impl Default for EffectsSection {
@@ -348,8 +309,6 @@ impl Default for EffectsSection {
             friction: env.friction,
             body_collision: CollisionMethod::NearestVertex,
             fine_collider: None,
-            sdf_resolution: body_collide::SdfCollider::DEFAULT_RESOLUTION,
-            depth_resolution: body_collide::DepthMapCollider::DEFAULT_RESOLUTION,
             follow_body: true,
             body_press: true,
             self_collision: false,
@@ -371,6 +330,42 @@ impl Default for EffectsSection {
             fine_margin: detail.margin,
             max_fine_stretch: detail.max_fine_stretch,
             fine_pokes: detail.pokes,
+            sdf: SdfSection::default(),
+            depth_maps: DepthMapsSection::default(),
+        }
+    }
+}
+
+/// The `sdf` collider's settings (`[effects.sdf]`).
+#[derive(Clone, Debug, Deserialize, Serialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct SdfSection {
+    /// Grid cells along the body's longest side.
+    #[schemars(range(min = 8, max = 512))]
+    pub resolution: usize,
+}
+
+impl Default for SdfSection {
+    fn default() -> Self {
+        SdfSection {
+            resolution: body_collide::SdfCollider::DEFAULT_RESOLUTION,
+        }
+    }
+}
+
+/// The `depth_maps` collider's settings (`[effects.depth_maps]`).
+#[derive(Clone, Debug, Deserialize, Serialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct DepthMapsSection {
+    /// Pixels along the body's longest side.
+    #[schemars(range(min = 16, max = 4096))]
+    pub resolution: usize,
+}
+
+impl Default for DepthMapsSection {
+    fn default() -> Self {
+        DepthMapsSection {
+            resolution: body_collide::DepthMapCollider::DEFAULT_RESOLUTION,
         }
     }
 }

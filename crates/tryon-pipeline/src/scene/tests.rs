@@ -8,6 +8,10 @@ use std::path::Path;
 /// A minimal scene whose `table` has kind `kind` (the other tables made to fit it), with `extra`
 /// lines added to that table.
 fn minimal(table: &str, kind: Option<&str>, extra: &str) -> String {
+    // A table inside a table (`cloth.vbd`) goes under its parent.
+    if let Some((parent, _)) = table.split_once('.') {
+        return minimal(parent, kind, &format!("\n[{table}]\n{extra}"));
+    }
     let (mut body, mut garment, mut motion) = (
         "kind = \"mannequin\"\n".to_string(),
         "kind = \"dress\"\n".to_string(),
@@ -205,58 +209,107 @@ fn the_reference_lists_every_kind_and_its_keys() {
     );
 }
 
+/// `[cloth]` with a solver's table under it holding `keys`.
+fn solver_table(solver: &str, keys: &str) -> String {
+    minimal(&format!("cloth.{solver}"), None, keys)
+}
+
 #[test]
 fn a_ratio_with_an_off_value_refuses_what_lies_between_and_says_what_is_allowed() {
-    for (key, bad) in [
-        ("vbd_limit", "0.5"),
-        ("vbd_limit", "2.5"),
-        ("max_strain", "0.9"),
+    for (table, key, bad) in [
+        ("vbd", "limit", "0.5"),
+        ("vbd", "limit", "2.5"),
+        ("p1", "max_strain", "0.9"),
     ] {
-        let text = minimal("cloth", None, &format!("{key} = {bad}\n"));
+        let text = solver_table(table, &format!("{key} = {bad}\n"));
         let e = Scene::parse(&text, Path::new("m.toml"))
             .unwrap_err()
             .to_string();
         assert!(
-            e.contains(&format!("cloth.{key}")) && e.contains("0 (off) or a ratio in [1, 2]"),
+            e.contains(&format!("cloth.{table}.{key}"))
+                && e.contains("0 (off) or a ratio in [1, 2]"),
             "{key} = {bad}: {e}"
         );
     }
     // A non-finite value is refused before the key's own rule, as not a finite number.
-    let text = minimal("cloth", None, "vbd_limit = nan\n");
+    let text = solver_table("vbd", "limit = nan\n");
     let e = Scene::parse(&text, Path::new("m.toml"))
         .unwrap_err()
         .to_string();
     assert!(
-        e.contains("cloth.vbd_limit") && e.contains("a finite number"),
+        e.contains("cloth.vbd.limit") && e.contains("a finite number"),
         "{e}"
     );
     for good in ["0", "1.0", "1.1"] {
-        let text = minimal("cloth", None, &format!("vbd_limit = {good}\n"));
+        let text = solver_table("vbd", &format!("limit = {good}\n"));
         let s = Scene::parse(&text, Path::new("m.toml")).unwrap();
-        assert_eq!(s.cloth.vbd_limit, good.parse::<f64>().unwrap());
+        assert_eq!(s.cloth.vbd.limit, good.parse::<f64>().unwrap());
     }
 }
 
 #[test]
 fn the_vbd_bending_keys_refuse_what_is_out_of_range_and_name_the_key() {
     for (key, bad, allowed) in [
-        ("vbd_dihedral", "-1e-4", "0..=1"),
-        ("vbd_dihedral", "2", "0..=1"),
-        ("vbd_dihedral", "nan", "0..=1"),
-        ("vbd_flexion", "-5", "0..=1000000"),
+        ("dihedral", "-1e-4", "0..=1"),
+        ("dihedral", "2", "0..=1"),
+        ("dihedral", "nan", "0..=1"),
+        ("flexion", "-5", "0..=1000000"),
     ] {
-        let text = minimal("cloth", None, &format!("{key} = {bad}\n"));
+        let text = solver_table("vbd", &format!("{key} = {bad}\n"));
         let e = Scene::parse(&text, Path::new("m.toml"))
             .unwrap_err()
             .to_string();
         assert!(
-            e.contains(&format!("cloth.{key}")) && e.contains(allowed),
+            e.contains(&format!("cloth.vbd.{key}")) && e.contains(allowed),
             "{key} = {bad}: {e}"
         );
     }
-    let text = minimal("cloth", None, "vbd_dihedral = 1e-4\nvbd_flexion = 0\n");
+    let text = solver_table("vbd", "dihedral = 1e-4\nflexion = 0\n");
     let s = Scene::parse(&text, Path::new("m.toml")).unwrap();
-    assert_eq!((s.cloth.vbd_dihedral, s.cloth.vbd_flexion), (1e-4, 0.0));
+    assert_eq!((s.cloth.vbd.dihedral, s.cloth.vbd.bend), (1e-4, 0.0));
+}
+
+#[test]
+fn an_unknown_key_of_a_solver_table_is_named_with_its_whole_path() {
+    let text = solver_table("xpbd", "substep = 0.001\nsweeps = 3\n");
+    let e = Scene::parse(&text, Path::new("m.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("`cloth.xpbd.sweeps`") && e.contains("unknown field"),
+        "{e}"
+    );
+}
+
+#[test]
+fn an_old_flat_solver_key_is_refused_naming_its_new_table() {
+    for (table, old, new) in [
+        ("cloth", "vbd_substep = 0.01", "[cloth.vbd]"),
+        ("cloth", "xpbd_iterations = 2", "[cloth.xpbd]"),
+        ("cloth", "integrator = \"rk4\"", "[cloth.p1]"),
+        ("effects", "sdf_resolution = 64", "[effects.sdf]"),
+    ] {
+        let text = minimal(table, None, &format!("{old}\n"));
+        let e = Scene::parse(&text, Path::new("m.toml"))
+            .unwrap_err()
+            .to_string();
+        let key = old.split(" =").next().unwrap();
+        assert!(
+            e.contains(&format!("{table}.{key}")) && e.contains(new),
+            "{old}: {e}"
+        );
+    }
+    // The same through --set, and the new place takes the value.
+    let text = minimal("cloth", None, "");
+    let set = |s: &str| Scene::parse_with_overrides(&text, Path::new("m.toml"), &[s.to_string()]);
+    let e = set("cloth.vbd_limit=1.0").unwrap_err().to_string();
+    assert!(
+        e.contains("cloth.vbd_limit") && e.contains("[cloth.vbd]"),
+        "{e}"
+    );
+    assert_eq!(set("cloth.vbd.limit=1.0").unwrap().cloth.vbd.limit, 1.0);
+    let s = set("effects.depth_maps.resolution=64").unwrap();
+    assert_eq!(s.effects.depth_maps.resolution, 64);
 }
 
 #[test]

@@ -347,7 +347,7 @@ pub fn run_all(quick: bool, out: &Path, summary: Option<&Path>) -> Result<(), St
     let _ = writeln!(r, "\n## (f) Stretch guard (demo walk, P1's solver)\n");
     let _ = writeln!(
         r,
-        "P1's solver (the demo itself runs VBD, which needs no guard): a substep that stretches a structural edge past the guard ratio is retried at half the step (`[cloth] stretch_guard`). Stretch is over the coarse edges, penetration over the output surface. The walk is chaotic: a setting that changes any substep changes the whole run after it, so single figures here move between settings by more than the setting itself explains.\n"
+        "P1's solver (the demo itself runs VBD, which needs no guard): a substep that stretches a structural edge past the guard ratio is retried at half the step (`[cloth.p1] stretch_guard`). Stretch is over the coarse edges, penetration over the output surface. The walk is chaotic: a setting that changes any substep changes the whole run after it, so single figures here move between settings by more than the setting itself explains.\n"
     );
     let _ = writeln!(
         r,

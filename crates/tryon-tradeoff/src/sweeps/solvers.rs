@@ -2,6 +2,7 @@
 //! settings otherwise (`[cloth] solver`).
 
 use super::*;
+use tryon_pipeline::scene::SolverName;
 
 /// One solver on one scene.
 #[derive(Clone, Debug)]
@@ -28,14 +29,14 @@ const SCENES: [(&str, Option<usize>); 7] = [
     ("makehuman-casual-131.toml", Some(4)),
 ];
 
-/// The solvers compared.
-const SOLVERS: [&str; 3] = ["p1", "xpbd", "vbd"];
+/// The solvers compared: every one the schema has.
+const SOLVERS: [SolverName; 3] = SolverName::ALL;
 /// Variants run on one scene only: (scene, label, overrides). VBD's strain limit is for
 /// free-hanging sheets (garments do worse with it).
 const VARIANTS: [(&str, &str, &[&str]); 1] = [(
     "drape-sphere.toml",
     "vbd, limit 1.0",
-    &["cloth.solver=\"vbd\"", "cloth.vbd_limit=1.0"],
+    &["cloth.solver=\"vbd\"", "cloth.vbd.limit=1.0"],
 )];
 /// Points a complete sweep makes.
 pub(super) const POINTS: usize = SCENES.len() * SOLVERS.len() + VARIANTS.len();
@@ -45,7 +46,7 @@ pub(super) fn solver_sweep(quick: bool, log: &mut String) -> Result<Vec<SolverPo
     for (file, quick_frames) in SCENES {
         let runs = SOLVERS
             .iter()
-            .map(|&solver| (solver, vec![format!("cloth.solver=\"{solver}\"")]))
+            .map(|s| (s.as_str(), vec![format!("cloth.solver=\"{}\"", s.as_str())]))
             .chain(
                 VARIANTS
                     .iter()

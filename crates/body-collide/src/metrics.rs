@@ -1,6 +1,6 @@
 //! Accuracy metrics: edge stretch, penetration and detachment (by the exact referee).
 
-use body_collide::ExactCollider;
+use crate::ExactCollider;
 use tryon_core::math::{Real, Vec3};
 
 pub use crate::hold::{Baseline, DETACHED};
