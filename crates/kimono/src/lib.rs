@@ -6,11 +6,14 @@
 //!    and its bolt UVs.
 //! 3. `fit`: eq. (1), blend weights per sub-mesh, then the sub-meshes moved so they meet.
 //! 4. `print`: the print correction, the dimension sets' UVs scaled, then eq. (2) outward.
+//! 5. `dress`: the kimono put on the mannequin (placed around the squashed body, the body
+//!    inflated, the rows tied), for a driver that steps the cloth.
 
 pub mod bolt;
 mod builder;
 mod collar;
 pub mod dims;
+pub mod dress;
 pub mod family;
 pub mod fit;
 pub mod levels;

@@ -152,6 +152,66 @@ impl Pipeline {
     }
 }
 
+/// The stages of a driver that shapes the body and holds the cloth itself (the kimono's
+/// dressing): run on [`Pipeline::advance_coarse`], with no follower, bands, attached pieces,
+/// grab or surface stages.
+pub struct Parts {
+    pub scene: Scene,
+    /// The body at the start.
+    pub body_mesh: PolyMesh,
+    pub body: Box<dyn tryon_core::stages::BodyModel>,
+    pub motion: Option<Box<dyn tryon_core::stages::MotionSource>>,
+    pub collider: Option<Box<dyn Collider>>,
+    pub solver: Box<dyn tryon_core::stages::ClothSolver>,
+    pub garment: PolyMesh,
+    pub fps: Real,
+    pub frames: usize,
+}
+
+impl std::fmt::Debug for Parts {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Parts")
+            .field("scene", &self.scene.scene.name)
+            .field("frames", &self.frames)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Pipeline {
+    /// A pipeline of `parts` (the cloth starts at the solver's initial frame).
+    pub fn from_parts(parts: Parts) -> Result<Pipeline, AssembleError> {
+        let referee = ExactCollider::new(&parts.body_mesh, 0.0)?;
+        Ok(Pipeline {
+            scene: parts.scene,
+            body_mesh: parts.body_mesh,
+            body: parts.body,
+            motion: parts.motion,
+            retarget: None,
+            follower: None,
+            collider: parts.collider,
+            bands: None,
+            attachments: Vec::new(),
+            cloth: parts.solver.initial_frame(),
+            solver: parts.solver,
+            surface_stages: Vec::new(),
+            surface: FineSurface::default(),
+            referee,
+            garment: parts.garment,
+            placed_moved: 0,
+            warnings: Vec::new(),
+            estimate: budget::Estimate::default(),
+            wear: Vec::new(),
+            layered: Vec::new(),
+            pieces: Vec::new(),
+            frames: parts.frames,
+            fps: parts.fps,
+            grab: None,
+            end_shape: Vec::new(),
+            folds: crate::folding::Folds::default(),
+        })
+    }
+}
+
 /// Elastic bands: border loops lying on the body grip it (each garment's `band_gap`, m; default
 /// 6 mm for modelled garments, none for the patterns).
 fn bands(

@@ -1,11 +1,12 @@
-//! tryon-pipeline: the only crate that wires stages together: the scene file ([`Scene`], TOML),
-//! assembly of only the stages a scene enables ([`Pipeline`], its builders in `build`), the one
-//! frame loop (`pipeline`), whole runs with accuracy metrics judged by the exact referee
-//! ([`RunOutput`], [`Stats`]), exports, and the drape fixture (a scene on the same loop) used by
-//! tests and benchmarks.
+//! tryon-pipeline: the only crate that wires stages together: assembly of only the stages a
+//! scene enables ([`Pipeline`], its builders in `build`; the scene file is tryon-scene's
+//! [`Scene`]), the one frame loop (`pipeline`), whole runs judged by the exact referee
+//! ([`RunOutput`], [`Stats`]), exports, checkpoints, live steering, the kimono job and the
+//! kimono's dressing driven on the frame loop (`kimono_wear`, its geometry in `kimono::dress`),
+//! and the drape fixture (a scene on the same loop) used by tests and benchmarks.
 //!
-//! Modules depend in one direction: scene <- real <- build <- wardrobe <- assemble -> pipeline <- run,
-//! export, drape; timers and metrics are leaves.
+//! Modules depend in one direction: real <- build <- wardrobe <- assemble -> pipeline <- run,
+//! export, drape, kimono_wear; timers are a leaf.
 
 pub mod assemble;
 pub mod budget;
@@ -24,7 +25,8 @@ pub mod pipeline;
 pub mod real;
 pub mod resume;
 pub mod run;
-pub mod scene;
+/// The scene file (its own crate, re-exported under its old path).
+pub use tryon_scene as scene;
 pub mod stats;
 pub mod timers;
 pub mod wardrobe;

@@ -17,12 +17,7 @@ use tryon_core::stages::{
     SurfaceStage, Untimed,
 };
 
-/// Farthest a body vertex may move between two collider updates unless a scene says otherwise
-/// (m). Only the body near the cloth counts. A walk at 30 fps is left at one update; 131_01's
-/// lunges and arm swings (up to 30 cm a frame) get up to four. Smaller steps were tried: 4 cm
-/// splits the demo's walk too and doubles its cloth time (every sub-frame pays the strap's
-/// stretch-guard retries: 49 -> 333) with no gain in penetration.
-pub const BODY_STEP: Real = 0.08;
+pub use tryon_scene::BODY_STEP;
 /// Most sub-frames a frame is split into for a fast body.
 pub const MAX_BODY_PARTS: usize = 8;
 

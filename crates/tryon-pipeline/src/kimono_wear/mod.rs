@@ -1,68 +1,31 @@
-//! Worn kimono shapes (P2's target shapes, issue 23 item 3). P2 scanned real kimonos worn on
-//! mannequins; here the flat tailored kimono is put on the mannequin of its wearer's size by this
-//! project's cloth solver (VBD, self-contact on), in three acts:
-//!
-//! 1. Placing: the mannequin stands with its arms raised, squashed to 3% of its depth, between
-//!    the flat kimono's front and back layers; the fold line lies just over the shoulders, the
-//!    ohashori is folded into the flat start ([`fold`]), left front over right.
-//! 2. Inflating: the body grows back to its full depth over 30 frames while the fold line is held
-//!    and the fold's rows are drawn to their height; the solver keeps the cloth outside the body
-//!    and apart from itself; then the fold line is let go and the cloth settles.
-//! 3. Tying ([`tie`]): soft springs draw the cord's row, the band head's row and the hem onto
-//!    rings around the body, the left front wrapping over the right; the springs stay on (they
-//!    are the cord).
-//!
-//! The result keeps the initial kimono's topology. What it does not reach (rows off their rings,
-//! triangle pairs crossing) is measured and returned, not hidden.
+//! Worn kimono shapes (P2's target shapes, issue 23 item 3) and a kimono in a scene: the flat
+//! tailored kimono put on the mannequin of its wearer's size by this project's cloth solver (VBD,
+//! self-contact on), on the pipeline's frame loop. The dressing's geometry (placing, the folded
+//! start, the inflating body, the tie's rings) is `kimono::dress`; this module poses the
+//! mannequin, builds the stages and steps them: the body grows as an [`Inflating`] body model
+//! while the fold line is held, then the rows are tied by the solver's anchors.
 
 pub mod embedded;
-mod fold;
 pub(crate) mod scene;
-mod stand;
 pub mod store;
-mod tie;
 
+use crate::assemble::Parts;
 use crate::scene::{CollisionMethod, SolverName};
+use crate::timers::Timers;
+use crate::{LoopState, Pipeline};
+use body_model::Mannequin;
+use body_model::skin::SkinnedBody;
 use kimono::KimonoMesh;
+use kimono::dress::{Stand, Start, tie};
+pub use kimono::dress::{WearSettings, Worn};
 use std::time::Instant;
 use thiserror::Error;
-use tryon_core::frames::{BodyFrame, CoarseFrame};
+use tryon_core::frames::BodyFrame;
 use tryon_core::math::{Real, Vec3};
-use tryon_core::measure::{Measurements, smoothstep};
+use tryon_core::measure::Measurements;
 use tryon_core::mesh::PolyMesh;
-
-/// How the kimono is put on.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct WearSettings {
-    pub fps: Real,
-    /// Frames over which the body grows to its full depth.
-    pub inflate_frames: usize,
-    /// Frames of settling after it, the fold line let go.
-    pub settle_frames: usize,
-    /// Frames over which the rows are drawn to their rings, and frames they are then held there.
-    pub tie_frames: usize,
-    pub hold_frames: usize,
-    /// The springs' stiffness drawing the held rows (N/m per vertex).
-    pub hold_stiffness: Real,
-    /// A fourth row tied 7 cm under the bust (the datejime), so the fronts cross at the chest
-    /// instead of opening in a V to the cord. Off for the stored worn targets (it crumples the
-    /// back collar: their fit's largest error 4-7% becomes 11-13%, docs/decisions, *kimono dressing*).
-    pub under_bust_tie: bool,
-}
-
-impl Default for WearSettings {
-    fn default() -> Self {
-        Self {
-            fps: 30.0,
-            inflate_frames: 30,
-            settle_frames: 15,
-            tie_frames: 60,
-            hold_frames: 180,
-            hold_stiffness: 2e3,
-            under_bust_tie: false,
-        }
-    }
-}
+use tryon_core::pose::Pose;
+use tryon_core::stages::{BodyModel, StillMotion};
 
 /// Why a kimono could not be put on.
 #[derive(Debug, Error)]
@@ -74,30 +37,12 @@ pub enum WearError {
     Levels(#[from] kimono::LevelError),
     #[error("the wearer's mannequin: {0}")]
     Mannequin(#[from] tryon_core::measure::MeasureError),
+    #[error("{0}")]
+    Stand(#[from] kimono::dress::DressError),
     #[error("the shape to put on has {found} vertices; the kimono has {expected}")]
     Shape { found: usize, expected: usize },
     #[error("{what}: {message}")]
     Build { what: &'static str, message: String },
-}
-
-/// A worn kimono and what the dressing reached.
-#[derive(Clone, Debug)]
-pub struct Worn {
-    /// The worn shape, one position per vertex of the initial kimono.
-    pub positions: Vec<Vec3>,
-    /// The wearer's body as it stands (arms raised) and its triangles.
-    pub body: Vec<Vec3>,
-    pub body_triangles: Vec<[u32; 3]>,
-    /// Triangle pairs crossing: in the folded flat start, after inflating, at the end.
-    pub crossings: [usize; 3],
-    /// Each held row's mean distance from its ring at the end (cord, band head, hem), m.
-    pub row_lag_m: [Real; 3],
-    /// The vertices of the cord's and the band head's rows: what the cord holds.
-    pub tied: Vec<u32>,
-    /// The lowest cloth point above the ankle landmark (m; negative: below it).
-    pub hem_above_ankle_m: Real,
-    pub frames: usize,
-    pub ms_per_frame: Real,
 }
 
 fn build_err(what: &'static str) -> impl Fn(String) -> WearError {
@@ -113,8 +58,59 @@ pub fn wear(
     s: &WearSettings,
     on_frame: &mut dyn FnMut(&str, usize, usize),
 ) -> Result<Worn, WearError> {
-    let m = stand::measurements(w);
+    let m = kimono::dress::measurements(w);
     wear_on(&m, w, flat, base, s, on_frame)
+}
+
+/// The mannequin of measurements `m` standing as the kimono is put on (arms raised).
+fn stand(m: &Measurements) -> Result<Stand, WearError> {
+    let man = Mannequin::new(m)?;
+    let pose = kimono::dress::dress_pose(&man.skeleton);
+    let triangles = man.mesh.triangulate().0;
+    let skinned = SkinnedBody::new(
+        man.mesh.positions.clone(),
+        triangles.clone(),
+        man.skeleton.clone(),
+        man.joint_rest.clone(),
+        man.skin.clone(),
+    );
+    let mut posed = Vec::new();
+    skinned.skin_into(&pose, &mut posed);
+    Ok(Stand::new(*m, posed, triangles)?)
+}
+
+/// The body growing from squashed to its full depth: frame `k` of the run (its pose's time times
+/// the frame rate) is [`Start::body_at`] frame `k`.
+struct Inflating {
+    stand: Stand,
+    settings: WearSettings,
+}
+
+impl BodyModel for Inflating {
+    fn pose(&mut self, pose: &Pose, out: &mut BodyFrame) {
+        let body = self.body_at(pose);
+        let dt = 1.0 / self.settings.fps;
+        out.velocities = match out.positions.len() == body.len() {
+            true => body
+                .iter()
+                .zip(&out.positions)
+                .map(|(a, b)| (a - b) / dt)
+                .collect(),
+            false => vec![Vec3::zeros(); body.len()],
+        };
+        out.time = pose.time;
+        out.positions = body;
+    }
+    fn shape_at(&self, pose: &Pose, out: &mut Vec<Vec3>) {
+        *out = self.body_at(pose);
+    }
+}
+
+impl Inflating {
+    fn body_at(&self, pose: &Pose) -> Vec<Vec3> {
+        let f = (pose.time * self.settings.fps).round().max(0.0) as usize;
+        Start::body_at(&self.stand, &self.settings, f)
+    }
 }
 
 /// [`wear`] on the mannequin of measurements `m` (a scene's), the kimono tailored for `w`.
@@ -134,125 +130,48 @@ pub fn wear_on(
     }
     let d = kimono::tailor(w)?;
     let lv = kimono::Levels::new(&d)?;
-    let st = stand::stand(m)?;
-    // The fold line just over the shoulders, the kimono's plane at the torso's middle. Its
-    // vertices are found on the initial kimono: a fitted one's lie a few mm apart in height.
-    let fold_line = fold_line(base);
-    let fold_y = fold_line.iter().map(|&v| flat[v as usize].y).sum::<Real>()
-        / fold_line.len().max(1) as Real;
-    let hem = st.top + 0.012 - fold_y;
-    let shift = Vec3::new(0.0, hem, st.zc);
-    let rest: Vec<Vec3> = flat.iter().map(|p| p + shift).collect();
-    // The back collar stands above the fold in the flat layout; it starts behind the neck.
-    // (Found on the initial kimono, as the fold line is.)
-    let top = fold_top(base);
-    let start: Vec<Vec3> = rest
-        .iter()
-        .zip(&base.positions)
-        .map(|(p, b)| {
-            if b.y > top + 0.001 {
-                Vec3::new(p.x, p.y, st.zc - 0.012)
-            } else {
-                *p
-            }
-        })
-        .collect();
-    let place = fold::Placement {
-        rest: &rest,
-        base,
-        zc: st.zc,
-        hem,
-        cord: lv.outer[2],
-        band: lv.outer[3],
-    };
-    let folded = fold::fold(&place, start);
-    let garment = PolyMesh::from_triangles(rest.clone(), &base.triangles)
+    let st = stand(m)?;
+    let start = Start::new(&st, flat, base, &lv);
+    let garment = PolyMesh::from_triangles(start.rest.clone(), &base.triangles)
         .map_err(|e| build_err("the kimono mesh")(e.to_string()))?;
-    let mut scene = crate::Scene::demo();
-    scene.cloth.solver = SolverName::Vbd;
-    scene.effects.self_collision = true;
-    let solver = |held: &[u32]| {
-        crate::build::solver(&scene, &garment, vec![], held, &[], &[])
-            .map_err(|e| build_err("the cloth solver")(e.to_string()))
-    };
-    let mut held_solver = solver(&fold_line)?;
-    let mut free_solver = Some(solver(&[])?);
-    const S0: Real = 0.03;
-    let flat_body = PolyMesh::from_triangles(st.squashed(S0), &st.triangles)
-        .map_err(|e| build_err("the mannequin mesh")(e.to_string()))?;
-    let mut collider = crate::build::collider(
-        CollisionMethod::Exact,
-        &flat_body,
-        scene.cloth.thickness,
-        &scene.effects,
-    )
-    .map_err(|e| build_err("the body collider")(e.to_string()))?;
+    let mut p = dressing(&st, s, &garment, &start.fold_line)?;
+    p.cloth.positions.clone_from(&start.start);
     let crossings = |p: &[Vec3]| body_collide::crossings::crossings(p, &base.triangles).len();
-    let start_crossings = crossings(&folded.start);
+    let start_crossings = crossings(&start.start);
     let clock = Instant::now();
-    let mut frame = CoarseFrame::at_rest(folded.start);
-    let dt = 1.0 / s.fps;
+    let mut ls = p.start();
+    let mut timers = Timers::default();
     let frames = s.inflate_frames + s.settle_frames;
-    let mut prev = st.squashed(S0);
+    let mut free = Some(solver(&p.scene, &garment, &[])?);
     for f in 1..=frames {
-        let grown = smoothstep((f as Real / s.inflate_frames.max(1) as Real).min(1.0));
-        let body = st.squashed(S0 + (1.0 - S0) * grown);
-        let velocities = body.iter().zip(&prev).map(|(a, b)| (a - b) / dt).collect();
-        collider.update(&BodyFrame {
-            time: f as Real * dt,
-            positions: body.clone(),
-            velocities,
-        });
         if f > s.inflate_frames + 1 {
-            if let Some(x) = free_solver.take() {
-                held_solver = x;
+            if let Some(x) = free.take() {
+                p.solver = x;
             }
         }
-        let up: Vec<Vec3> = folded
-            .band_rows
-            .iter()
-            .map(|&v| {
-                let p = frame.positions[v as usize];
-                Vec3::new(p.x, folded.band_y, p.z)
-            })
-            .collect();
-        held_solver.anchor(&folded.band_rows, &up, s.hold_stiffness);
-        held_solver.step_frame(&mut frame, dt, collider.as_mut());
-        prev = body;
+        let up = start.band_targets(&p.cloth.positions);
+        p.solver.anchor(&start.band_rows, &up, s.hold_stiffness);
+        p.advance_coarse(&mut ls, p.frame_time(f), &mut timers);
         on_frame("inflate", f, frames);
     }
-    let inflated = crossings(&frame.positions);
-    let job = tie::TieJob {
-        m: &st.m,
-        rest: &rest,
-        base,
-        levels: &lv,
-        frames: s.tie_frames,
-        hold_frames: s.hold_frames,
-        stiffness: s.hold_stiffness,
-        under_bust: s.under_bust_tie,
-        dt,
-    };
-    let mut tie_solver = solver(&[])?;
-    let (tied_frames, row_lag_m, tied) = tie::tie(
-        &job,
-        tie_solver.as_mut(),
-        &mut frame,
-        collider.as_mut(),
-        on_frame,
-    );
-    let steps = frames + tied_frames;
+    let inflated = crossings(&p.cloth.positions);
+    // The body stands still while the kimono is tied.
+    p.motion = None;
+    p.solver = solver(&p.scene, &garment, &[])?;
+    let (tie_frames, row_lag_m, tied) =
+        tie_rows(&mut p, &mut ls, &st, &start, base, &lv, s, frames, on_frame);
+    let steps = frames + tie_frames;
     let ankle = st.m.landmarks().ankle;
+    let positions = std::mem::take(&mut p.cloth.positions);
     Ok(Worn {
-        crossings: [start_crossings, inflated, crossings(&frame.positions)],
-        hem_above_ankle_m: frame
-            .positions
+        crossings: [start_crossings, inflated, crossings(&positions)],
+        hem_above_ankle_m: positions
             .iter()
             .map(|p| p.y)
             .fold(Real::INFINITY, Real::min)
             - ankle,
-        positions: frame.positions,
-        body: prev,
+        positions,
+        body: ls.body_frame.positions,
         body_triangles: st.triangles,
         row_lag_m,
         tied,
@@ -261,22 +180,99 @@ pub fn wear_on(
     })
 }
 
-/// The height of the shoulders' fold line on the initial kimono `base` (laid flat, the fold line
-/// its highest row outside the collar).
-fn fold_top(base: &KimonoMesh) -> Real {
-    let collar = &base.sub_mesh_vertices()[kimono::mesh::sub::COLLAR as usize];
-    (0..base.positions.len() as u32)
-        .filter(|v| collar.binary_search(v).is_err())
-        .map(|v| base.positions[v as usize].y)
-        .fold(Real::NEG_INFINITY, Real::max)
+/// The scene the dressing's solvers are built from (VBD, self-contact on; one sub-frame a frame).
+fn dressing_scene() -> crate::Scene {
+    let mut scene = crate::Scene::demo();
+    scene.cloth.solver = SolverName::Vbd;
+    scene.effects.self_collision = true;
+    scene.scene.body_step = 0.0;
+    scene.scene.settle = 0.0;
+    scene
 }
 
-/// The vertices on the shoulders' fold line of the initial kimono `base`.
-fn fold_line(base: &KimonoMesh) -> Vec<u32> {
-    let top = fold_top(base);
-    (0..base.positions.len() as u32)
-        .filter(|&v| (base.positions[v as usize].y - top).abs() < 1e-4)
-        .collect()
+fn solver(
+    scene: &crate::Scene,
+    garment: &PolyMesh,
+    held: &[u32],
+) -> Result<Box<dyn tryon_core::stages::ClothSolver>, WearError> {
+    crate::build::solver(scene, garment, vec![], held, &[], &[])
+        .map_err(|e| build_err("the cloth solver")(e.to_string()))
+}
+
+/// The pipeline the kimono is put on with: the inflating body against the exact collider, the
+/// fold line held.
+fn dressing(
+    st: &Stand,
+    s: &WearSettings,
+    garment: &PolyMesh,
+    fold_line: &[u32],
+) -> Result<Pipeline, WearError> {
+    let scene = dressing_scene();
+    let flat_body = PolyMesh::from_triangles(st.squashed(kimono::dress::SQUASH), &st.triangles)
+        .map_err(|e| build_err("the mannequin mesh")(e.to_string()))?;
+    let collider = crate::build::collider(
+        CollisionMethod::Exact,
+        &flat_body,
+        scene.cloth.thickness,
+        &scene.effects,
+    )
+    .map_err(|e| build_err("the body collider")(e.to_string()))?;
+    let frames = s.inflate_frames + s.settle_frames;
+    let parts = Parts {
+        solver: solver(&scene, garment, fold_line)?,
+        scene,
+        body_mesh: flat_body,
+        body: Box::new(Inflating {
+            stand: st.clone(),
+            settings: *s,
+        }),
+        motion: Some(Box::new(StillMotion {
+            joints: 0,
+            duration: frames as Real / s.fps,
+        })),
+        collider: Some(collider),
+        garment: garment.clone(),
+        fps: s.fps,
+        frames,
+    };
+    Pipeline::from_parts(parts).map_err(|e| build_err("the dressing")(e.to_string()))
+}
+
+/// The tie on `p`'s loop: the rows drawn onto their rings by the solver's anchors, then held.
+/// Returns the frames stepped, the rows' lag and the tied vertices (`tie::TiePlan::finish`).
+fn tie_rows(
+    p: &mut Pipeline,
+    ls: &mut LoopState,
+    st: &Stand,
+    start: &Start,
+    base: &KimonoMesh,
+    lv: &kimono::Levels,
+    s: &WearSettings,
+    first: usize,
+    on_frame: &mut dyn FnMut(&str, usize, usize),
+) -> (usize, [Real; 3], Vec<u32>) {
+    let job = tie::TieJob {
+        m: &st.m,
+        rest: &start.rest,
+        base,
+        levels: lv,
+        frames: s.tie_frames,
+        hold_frames: s.hold_frames,
+        stiffness: s.hold_stiffness,
+        under_bust: s.under_bust_tie,
+    };
+    let plan = tie::TiePlan::new(&job, &p.cloth.positions);
+    let mut targets = plan.targets(0);
+    let mut timers = Timers::default();
+    for f in 1..=plan.frames {
+        targets = plan.targets(f);
+        p.solver.anchor(&plan.held, &targets, plan.stiffness);
+        // The loop's clock goes on from the inflation's last frame.
+        p.advance_coarse(ls, p.frame_time(first + f), &mut timers);
+        on_frame("tie", f, plan.frames);
+    }
+    let (lag, tied) = plan.finish(&p.cloth.positions, &targets);
+    (plan.frames, lag, tied)
 }
 
 #[cfg(test)]
@@ -319,7 +315,7 @@ mod tests {
         let w = kimono::Wearer::new(1.62, 0.84, 0.64, 0.90);
         let fit = crate::kimono::fit_kimono(&w, crate::kimono::Targets::Flat).unwrap();
         let base = &fit.family.base;
-        let line = fold_line(base);
+        let line = kimono::dress::fold_line(base);
         let subs = base.sub_mesh_vertices();
         let sleeves = [
             kimono::mesh::sub::LEFT_SLEEVE,

@@ -105,7 +105,7 @@ pub(crate) fn lead_in(
     motion: Box<dyn MotionSource>,
 ) -> Box<dyn MotionSource> {
     Box::new(LeadIn {
-        from: super::stand::dress_pose(skeleton),
+        from: kimono::dress::dress_pose(skeleton),
         lead: k.lead,
         inner: motion,
     })

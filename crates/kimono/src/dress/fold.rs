@@ -4,8 +4,8 @@
 //! front's (left over right, as a kimono is always worn). The collar and over-collar go with the
 //! front vertex nearest along the mesh; the sleeves stay unfolded.
 
-use kimono::KimonoMesh;
-use kimono::mesh::sub;
+use crate::KimonoMesh;
+use crate::mesh::sub;
 use std::collections::VecDeque;
 use tryon_core::math::{Real, Vec3};
 
@@ -13,7 +13,8 @@ use tryon_core::math::{Real, Vec3};
 const LAYER: Real = 0.004;
 
 /// Where the flat kimono lies around the squashed body.
-pub(super) struct Placement<'a> {
+#[derive(Debug)]
+pub struct Placement<'a> {
     /// The flat kimono moved over the body (fold line just over the shoulders).
     pub rest: &'a [Vec3],
     pub base: &'a KimonoMesh,
@@ -27,7 +28,8 @@ pub(super) struct Placement<'a> {
 }
 
 /// The folded start and the rows the fold hangs from (the cord's and the band head's).
-pub(super) struct Folded {
+#[derive(Clone, Debug)]
+pub struct Folded {
     pub start: Vec<Vec3>,
     pub band_rows: Vec<u32>,
     /// The height the band rows are held at while the body grows.
@@ -76,7 +78,7 @@ fn sides(p: &Placement) -> (Vec<bool>, Vec<u32>) {
 }
 
 /// Folds the ohashori into `start` (the flat placement with the back collar behind the neck).
-pub(super) fn fold(p: &Placement, start: Vec<Vec3>) -> Folded {
+pub fn fold(p: &Placement, start: Vec<Vec3>) -> Folded {
     let subs = p.base.sub_mesh_vertices();
     let sleeve = |v: u32| {
         subs[sub::RIGHT_SLEEVE as usize].binary_search(&v).is_ok()
@@ -113,7 +115,7 @@ pub(super) fn fold(p: &Placement, start: Vec<Vec3>) -> Folded {
         let (ys, layer) = map(src.y - p.hem, src.y);
         q.y = r.y + (ys - src.y);
         if src.y - p.hem <= band + 1e-6 {
-            if (r.z - p.zc).abs() < 0.5 * kimono::mesh::GAP {
+            if (r.z - p.zc).abs() < 0.5 * crate::mesh::GAP {
                 // A side seam, the tube's edge in the flat layout: outward is sideways.
                 q.x += r.x.signum() * layer * LAYER;
             } else {

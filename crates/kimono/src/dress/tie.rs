@@ -7,13 +7,11 @@
 //! front wraps over the right. Springs, not held vertices: a held vertex led through another
 //! layer would cross it (docs/decisions, *kimono dressing*), a spring gives way.
 
-use kimono::KimonoMesh;
-use kimono::mesh::sub;
+use crate::KimonoMesh;
+use crate::mesh::sub;
 use std::f64::consts::TAU;
-use tryon_core::frames::CoarseFrame;
 use tryon_core::math::{Real, Vec3};
 use tryon_core::measure::{Measurements, smoothstep};
-use tryon_core::stages::{ClothSolver, Collider};
 
 /// The cord's room over the body (m) and the left front's over the right.
 const EASE: Real = 0.02;
@@ -51,17 +49,17 @@ fn angle_at_arc(e: [Real; 3], u: Real) -> Real {
 }
 
 /// What the tie works on.
-pub(super) struct TieJob<'a> {
+#[derive(Debug)]
+pub struct TieJob<'a> {
     pub m: &'a Measurements,
     pub rest: &'a [Vec3],
     pub base: &'a KimonoMesh,
-    pub levels: &'a kimono::Levels,
+    pub levels: &'a crate::Levels,
     pub frames: usize,
     pub hold_frames: usize,
     pub stiffness: Real,
     /// Whether the fourth row, under the bust, is tied.
     pub under_bust: bool,
-    pub dt: Real,
 }
 
 /// One held vertex's way: from where it is to its place on its row's ring.
@@ -136,7 +134,7 @@ fn left_side(job: &TieJob, subs: &[Vec<u32>], v: u32) -> bool {
 }
 
 /// The held vertices, their plans and each row's size.
-fn plan(job: &TieJob, frame: &CoarseFrame) -> (Vec<u32>, Vec<Plan>, [usize; 4]) {
+fn plan(job: &TieJob, positions: &[Vec3]) -> (Vec<u32>, Vec<Plan>, [usize; 4]) {
     let lm = job.m.landmarks();
     let lv = job.levels;
     let hem = job.rest.iter().map(|v| v.y).fold(Real::INFINITY, Real::min);
@@ -184,7 +182,7 @@ fn plan(job: &TieJob, frame: &CoarseFrame) -> (Vec<u32>, Vec<Plan>, [usize; 4]) 
             } else {
                 (-(seam + (seam + f.x)), 0.0)
             };
-            let p = frame.positions[v as usize];
+            let p = positions[v as usize];
             let e = section(job.m, level.unwrap_or(p.y), 0.0);
             let mut angle = p.x.atan2(-(p.z - e[2]));
             if arc > 0.0 && angle < -0.5 {
@@ -219,40 +217,73 @@ fn plan(job: &TieJob, frame: &CoarseFrame) -> (Vec<u32>, Vec<Plan>, [usize; 4]) 
     (held, plans, sizes)
 }
 
-/// Ties the kimono; returns the frames stepped, the first three rows' mean distance from their
-/// rings at the end (cord, band head, hem) and the vertices that stay tied in a scene (the cord's,
-/// the band head's and the under-bust rows').
-pub(super) fn tie(
-    job: &TieJob,
-    solver: &mut dyn ClothSolver,
-    frame: &mut CoarseFrame,
-    collider: &mut dyn Collider,
-    on_frame: &mut dyn FnMut(&str, usize, usize),
-) -> (usize, [Real; 3], Vec<u32>) {
-    let (held, plans, sizes) = plan(job, frame);
-    let total = job.frames + job.hold_frames;
-    // Where the rows start (what no frames of tying leaves them measured against).
-    let mut targets: Vec<Vec3> = plans.iter().map(|p| p.at(job.m, 0.0)).collect();
-    for f in 1..=total {
-        let tau = smoothstep((f as Real / job.frames.max(1) as Real).min(1.0));
-        targets = plans.iter().map(|p| p.at(job.m, tau)).collect();
-        solver.anchor(&held, &targets, job.stiffness);
-        solver.step_frame(frame, job.dt, collider);
-        on_frame("tie", f, total);
+/// The tie's plan: the held rows' vertices and where each is drawn, frame by frame; a driver
+/// anchors [`TiePlan::held`] to [`TiePlan::targets`] before each of [`TiePlan::frames`] steps.
+#[derive(Clone)]
+pub struct TiePlan {
+    /// The held vertices, row after row (cord, band head, hem, under the bust).
+    pub held: Vec<u32>,
+    plans: Vec<Plan>,
+    sizes: [usize; 4],
+    m: Measurements,
+    tie_frames: usize,
+    /// Frames in all: drawn onto the rings, then held there.
+    pub frames: usize,
+    pub stiffness: Real,
+}
+
+impl std::fmt::Debug for TiePlan {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("TiePlan")
+            .field("held", &self.held.len())
+            .field("frames", &self.frames)
+            .finish_non_exhaustive()
     }
-    let mut lag = [0.0; 3];
-    let mut at = 0;
-    for (k, n) in sizes.iter().take(3).enumerate() {
-        let d = held[at..at + n]
-            .iter()
-            .zip(&targets[at..at + n])
-            .map(|(&v, t)| (frame.positions[v as usize] - t).norm());
-        lag[k] = d.sum::<Real>() / (*n).max(1) as Real;
-        at += n;
+}
+
+impl TiePlan {
+    /// The plan for the kimono whose vertices are at `positions` when the tie starts.
+    pub fn new(job: &TieJob, positions: &[Vec3]) -> TiePlan {
+        let (held, plans, sizes) = plan(job, positions);
+        TiePlan {
+            held,
+            plans,
+            sizes,
+            m: *job.m,
+            tie_frames: job.frames,
+            frames: job.frames + job.hold_frames,
+            stiffness: job.stiffness,
+        }
     }
-    let mut tied = held[..sizes[0] + sizes[1]].to_vec();
-    tied.extend_from_slice(&held[sizes[0] + sizes[1] + sizes[2]..]);
-    tied.sort_unstable();
-    tied.dedup();
-    (total, lag, tied)
+
+    /// The held vertices' targets at frame `f` of the tie (0: where the rows start).
+    pub fn targets(&self, f: usize) -> Vec<Vec3> {
+        let tau = match f {
+            0 => 0.0,
+            _ => smoothstep((f as Real / self.tie_frames.max(1) as Real).min(1.0)),
+        };
+        self.plans.iter().map(|p| p.at(&self.m, tau)).collect()
+    }
+
+    /// The first three rows' mean distance from their rings (cord, band head, hem) with the
+    /// kimono at `positions` and the targets of the last frame, and the vertices that stay tied
+    /// in a scene (the cord's, the band head's and the under-bust rows').
+    pub fn finish(&self, positions: &[Vec3], targets: &[Vec3]) -> ([Real; 3], Vec<u32>) {
+        let (held, sizes) = (&self.held, self.sizes);
+        let mut lag = [0.0; 3];
+        let mut at = 0;
+        for (k, n) in sizes.iter().take(3).enumerate() {
+            let d = held[at..at + n]
+                .iter()
+                .zip(&targets[at..at + n])
+                .map(|(&v, t)| (positions[v as usize] - t).norm());
+            lag[k] = d.sum::<Real>() / (*n).max(1) as Real;
+            at += n;
+        }
+        let mut tied = held[..sizes[0] + sizes[1]].to_vec();
+        tied.extend_from_slice(&held[sizes[0] + sizes[1] + sizes[2]..]);
+        tied.sort_unstable();
+        tied.dedup();
+        (lag, tied)
+    }
 }

@@ -2,15 +2,14 @@
 //! raised to the horizontal (the flat kimono's sleeves lie along them), and the plane through
 //! the torso's middle where the flat kimono's front and back layers meet.
 
-use super::WearError;
-use body_model::Mannequin;
-use body_model::skin::SkinnedBody;
+use super::DressError;
 use tryon_core::math::{Real, UnitQuat, Vec3};
 use tryon_core::measure::Measurements;
 use tryon_core::pose::{Pose, Skeleton, mannequin_joints as j};
 
 /// The standing wearer.
-pub(super) struct Stand {
+#[derive(Clone, Debug)]
+pub struct Stand {
     pub m: Measurements,
     /// The body's vertices with the arms raised.
     pub posed: Vec<Vec3>,
@@ -26,7 +25,7 @@ const ARM_RAISE_DEG: Real = 45.0;
 
 /// The pose a kimono is put on in: the rest pose with the upper arms raised to the horizontal (a
 /// skeleton without the mannequin's upper arms keeps its rest pose).
-pub(crate) fn dress_pose(skeleton: &Skeleton) -> Pose {
+pub fn dress_pose(skeleton: &Skeleton) -> Pose {
     let mut pose = Pose::rest(skeleton.names.len());
     for (ua, s) in [(j::UPPERARM_L, 1.0), (j::UPPERARM_R, -1.0)] {
         if let Some(k) = skeleton.names.iter().position(|x| x == ua) {
@@ -39,7 +38,7 @@ pub(crate) fn dress_pose(skeleton: &Skeleton) -> Pose {
 
 /// The measurements of `w`'s mannequin: shoulder width, arm length and inseam follow the height
 /// as on the 1.65 m mannequin.
-pub(crate) fn measurements(w: &kimono::Wearer) -> Measurements {
+pub fn measurements(w: &crate::Wearer) -> Measurements {
     let sc = w.height / 1.65;
     Measurements {
         height: w.height,
@@ -52,50 +51,38 @@ pub(crate) fn measurements(w: &kimono::Wearer) -> Measurements {
     }
 }
 
-/// The mannequin of measurements `m`, arms raised.
-pub(super) fn stand(m: &Measurements) -> Result<Stand, WearError> {
-    let m = *m;
-    let man = Mannequin::new(&m)?;
-    let pose = dress_pose(&man.skeleton);
-    let triangles = man.mesh.triangulate().0;
-    let skinned = SkinnedBody::new(
-        man.mesh.positions.clone(),
-        triangles.clone(),
-        man.skeleton.clone(),
-        man.joint_rest.clone(),
-        man.skin.clone(),
-    );
-    let mut posed = Vec::new();
-    skinned.skin_into(&pose, &mut posed);
-    let lm = m.landmarks();
-    let near = |v: &&Vec3| (v.y - lm.armpit).abs() < 0.03 && v.x.abs() < 0.05;
-    let (lo, hi) = posed
-        .iter()
-        .filter(near)
-        .fold((Real::INFINITY, Real::NEG_INFINITY), |(a, b), v| {
-            (a.min(v.z), b.max(v.z))
-        });
-    let top = posed
-        .iter()
-        .filter(|v| (0.1..0.3).contains(&v.x.abs()))
-        .map(|v| v.y)
-        .fold(Real::NEG_INFINITY, Real::max);
-    if !(lo.is_finite() && hi.is_finite() && top.is_finite()) {
-        return Err(WearError::Build {
-            what: "the mannequin",
-            message: "no torso vertices at the armpits or shoulders".into(),
-        });
-    }
-    Ok(Stand {
-        m,
-        posed,
-        triangles,
-        zc: 0.5 * (lo + hi),
-        top,
-    })
-}
-
 impl Stand {
+    /// The wearer of measurements `m` standing as `posed` (the mannequin's vertices in
+    /// [`dress_pose`]) over `triangles`.
+    pub fn new(
+        m: Measurements,
+        posed: Vec<Vec3>,
+        triangles: Vec<[u32; 3]>,
+    ) -> Result<Stand, DressError> {
+        let lm = m.landmarks();
+        let near = |v: &&Vec3| (v.y - lm.armpit).abs() < 0.03 && v.x.abs() < 0.05;
+        let (lo, hi) = posed
+            .iter()
+            .filter(near)
+            .fold((Real::INFINITY, Real::NEG_INFINITY), |(a, b), v| {
+                (a.min(v.z), b.max(v.z))
+            });
+        let top = posed
+            .iter()
+            .filter(|v| (0.1..0.3).contains(&v.x.abs()))
+            .map(|v| v.y)
+            .fold(Real::NEG_INFINITY, Real::max);
+        if !(lo.is_finite() && hi.is_finite() && top.is_finite()) {
+            return Err(DressError::NoTorso);
+        }
+        Ok(Stand {
+            m,
+            posed,
+            triangles,
+            zc: 0.5 * (lo + hi),
+            top,
+        })
+    }
     /// The body squashed toward the middle plane to `s` of its depth.
     pub fn squashed(&self, s: Real) -> Vec<Vec3> {
         let zc = self.zc;

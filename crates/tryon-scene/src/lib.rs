@@ -89,6 +89,13 @@ pub struct Scene {
     pub source: Option<PathBuf>,
 }
 
+/// Farthest a body vertex may move between two collider updates unless a scene says otherwise
+/// (m). Only the body near the cloth counts. A walk at 30 fps is left at one update; 131_01's
+/// lunges and arm swings (up to 30 cm a frame) get up to four. Smaller steps were tried: 4 cm
+/// splits the demo's walk too and doubles its cloth time (every sub-frame pays the strap's
+/// stretch-guard retries: 49 -> 333) with no gain in penetration.
+pub const BODY_STEP: tryon_core::math::Real = 0.08;
+
 /// The embedded default scene (`tryon demo`): the mannequin in the dress, walking.
 pub const DEMO_SCENE: &str = include_str!("../../../data/scenes/demo-dress-walk.toml");
 

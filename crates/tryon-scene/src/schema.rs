@@ -46,7 +46,7 @@ impl Default for SceneSection {
             duration: None,
             settle: 0.3,
             pipelined: false,
-            body_step: crate::pipeline::BODY_STEP,
+            body_step: crate::BODY_STEP,
         }
     }
 }
