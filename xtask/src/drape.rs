@@ -1,7 +1,31 @@
 //! `cargo xtask drape`: runs the drape scene in release and prints what it measured.
 
 use cloth_dyn::IntegratorKind;
+use std::process::Command;
 use tryon_pipeline::{DrapeConfig, DrapeScene};
+
+/// Runs [`run`] in a release build: xtask itself is built without whole-program LTO (the `tools`
+/// profile), whose times are not the ones to quote, so from there it runs itself again in release.
+pub fn run_in_release(args: &[String]) -> Result<(), String> {
+    let exe = std::env::current_exe().map_err(|e| format!("cannot find xtask's own path: {e}"))?;
+    let in_release = exe
+        .parent()
+        .and_then(|d| d.file_name())
+        .is_some_and(|d| d == "release");
+    if in_release {
+        return run(args);
+    }
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let status = Command::new(&cargo)
+        .args(["run", "--release", "-q", "-p", "xtask", "--", "drape"])
+        .args(args)
+        .status()
+        .map_err(|e| format!("cannot run {cargo}: {e}"))?;
+    match status.success() {
+        true => Ok(()),
+        false => Err(format!("the release drape run failed ({status})")),
+    }
+}
 
 pub fn run(args: &[String]) -> Result<(), String> {
     let mut sizes = Vec::new();

@@ -21,6 +21,8 @@ commands:
   tradeoff [--quick] [--summary FILE]
                      what accuracy costs in time: collider, integrator, refinement and wrinkle
                      sweeps and P4's scene; report.md and SVG plots under target/tradeoff/
+                     (release; --quick is a check at a few frames in the tools build, not
+                     figures to quote)
   outputs save DIR | outputs compare OLD NEW
                      run every scene (and variants) into DIR; compare two such runs (GLB and
                      PNG bytes, stats.json but timings)
@@ -43,7 +45,7 @@ fn main() -> ExitCode {
     let result = match args.first().map(String::as_str) {
         Some("ci") => ci(),
         Some("bench") => bench(&args[1..]),
-        Some("drape") => drape::run(&args[1..]),
+        Some("drape") => drape::run_in_release(&args[1..]),
         Some("tidy") => tidy::run(),
         Some("fuzz") => fuzz::run(&args[1..]),
         Some("outputs") => outputs::run(&args[1..]),
@@ -204,10 +206,16 @@ fn kimono_targets(args: &[String]) -> Result<(), String> {
     cargo(&a)
 }
 
+/// The tradeoff sweeps: in release (fat LTO), whose times the report quotes; `--quick`, a check
+/// that every curve has points, in xtask's own `tools` build (the crates CI has already built).
 fn tradeoff(args: &[String]) -> Result<(), String> {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     std::env::set_current_dir(&root).map_err(|e| format!("{}: {e}", root.display()))?;
-    let mut a = vec!["run", "--release", "-q", "-p", "tryon-tradeoff", "--"];
+    let profile = match args.iter().any(|a| a == "--quick") {
+        true => "--profile=tools",
+        false => "--release",
+    };
+    let mut a = vec!["run", profile, "-q", "-p", "tryon-tradeoff", "--"];
     a.extend(args.iter().map(String::as_str));
     cargo(&a)
 }
