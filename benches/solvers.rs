@@ -1,7 +1,7 @@
 //! Criterion benchmarks of the garment solvers' cloth step alone (`ClothSolver::step_frame`), on one
 //! thread and on two: VBD on the drape at N = 64 and 128 (plain, with its strain limit at rest
 //! length, and with the cloth's contact with itself), and on the MakeHuman walk (plain, with
-//! the nearest-vertex collider instead of the scene's exact one, with hinges, pokes, or
+//! the nearest-vertex collider instead of the scene's exact one, with hinges or
 //! self-contact; skipped when
 //! the shared assets are absent). Each scene is run untimed to a frame in contact (the drape after
 //! 1 s, the walk at frame 30); every timed iteration then steps that same frame from the same cloth
@@ -50,7 +50,7 @@ fn cloth_step(c: &mut Criterion) {
         .sample_size(10)
         .warm_up_time(Duration::from_secs(1))
         .measurement_time(Duration::from_secs(4));
-    let cases: [(&str, &str, &[&str], usize); 15] = [
+    let cases: [(&str, &str, &[&str], usize); 14] = [
         (
             "vbd_drape_64",
             "drape-sphere.toml",
@@ -95,12 +95,6 @@ fn cloth_step(c: &mut Criterion) {
             "vbd_makehuman_walk_dihedral",
             "makehuman-dress-walk.toml",
             &["cloth.vbd.dihedral=1e-4", "cloth.vbd.flexion=0"],
-            30,
-        ),
-        (
-            "vbd_makehuman_walk_pokes",
-            "makehuman-dress-walk.toml",
-            &["cloth.vbd.pokes=true"],
             30,
         ),
         (

@@ -23,8 +23,9 @@ fn scene(model: Option<&str>) -> Pipeline {
         "[scene]\nname = \"surface\"\nfps = 60\nduration = 1.0\nsettle = 0.0\n\
          [body]\nkind = \"sphere\"\nradius = 0.3\nsubdivisions = 4\n\
          [garment]\nkind = \"square\"\nparticles = 27\nsize = 1.0\ndrop_height = 0.4\n\
-         [motion]\nkind = \"still\"\n\
-         [effects]\nfollow_body = false\nfriction = 0.3\nrefine = 2\nwrinkles = {wrinkles}\n\
+         [motion]\nkind = \"still\"\n[cloth]\nsolver = \"p1\"\n\
+         [effects]\nfollow_body = false\nfriction = 0.3\nbody_collision = \"nearest_vertex\"\n\
+         refine = 2\nwrinkles = {wrinkles}\n\
          wrinkle_model = \"{model}\"\n"
     );
     let s = Scene::parse(&text, Path::new("surface.toml")).unwrap_or_else(|e| panic!("{e}"));

@@ -252,7 +252,7 @@ fn shipped_scenes_check_and_the_demo_is_the_shipped_file() {
 /// A sheet falling in free air, far from the sphere: friction can never act.
 fn falling_sheet(effects: &str) -> Scene {
     let text = format!(
-        "[scene]\nfps = 60\nduration = 0.2\nsettle = 0\n[body]\nkind = \"sphere\"\n[garment]\nkind = \"square\"\nparticles = 8\ndrop_height = 3.0\n[motion]\nkind = \"still\"\n[effects]\nfollow_body = false\n{effects}"
+        "[scene]\nfps = 60\nduration = 0.2\nsettle = 0\n[body]\nkind = \"sphere\"\n[garment]\nkind = \"square\"\nparticles = 8\ndrop_height = 3.0\n[motion]\nkind = \"still\"\n[effects]\nfollow_body = false\nrefine = 0\n{effects}"
     );
     Scene::parse(&text, Path::new("sheet.toml")).unwrap()
 }
@@ -287,7 +287,11 @@ fn an_effect_that_cannot_act_changes_nothing_and_stages_are_only_the_enabled_one
     // The walking mannequin without following and without collision.
     let text = "[body]\nkind = \"mannequin\"\n[garment]\nkind = \"skirt\"\n[motion]\nkind = \"walk\"\n[effects]\nfollow_body = false\nbody_collision = \"none\"\n";
     let p = Pipeline::new(Scene::parse(text, Path::new("t.toml")).unwrap()).unwrap();
-    assert_eq!(p.stages(), vec!["motion", "skinning", "cloth", "referee"]);
+    // The default refinement with nothing to collide against: PN triangles only.
+    assert_eq!(
+        p.stages(),
+        vec!["motion", "skinning", "cloth", "refine", "referee"]
+    );
 }
 
 #[test]
@@ -311,14 +315,11 @@ fn the_demo_surface_stays_out_of_the_body_and_wrinkles_restore_length() {
     // demo under P1's solver (under VBD, the demo's own, edges stay within 3% of their length and
     // there is little to give back: docs/decisions, *solver: vbd*).
     let with = |extra: &str| {
-        let text = DEMO_SCENE
-            .replace("wrinkles = false\n", extra)
-            .replace("solver = \"vbd\"", "solver = \"p1\"");
-        assert!(
-            text.contains("solver = \"p1\""),
-            "the demo names its solver"
-        );
-        Scene::parse(&text, Path::new("demo.toml")).unwrap()
+        let sets = [
+            "cloth.solver=\"p1\"".to_string(),
+            format!("effects.{}", extra.trim()),
+        ];
+        Scene::parse_with_overrides(DEMO_SCENE, Path::new("demo.toml"), &sets).unwrap()
     };
     let frames = 45;
     let mut errors = Vec::new();

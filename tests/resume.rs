@@ -226,7 +226,7 @@ fn a_checkpoint_of_another_scene_or_a_damaged_one_is_refused() {
     assert!(matches!(e, CheckpointError::Damaged { .. }), "{e}");
     // A checkpoint of an earlier layout (its magic) and one cut after the magic are refused.
     let mut old = bytes.clone();
-    old[..8].copy_from_slice(b"TRYONCK3");
+    old[..8].copy_from_slice(b"TRYONCK4");
     std::fs::write(&path, &old).unwrap();
     let e = Checkpoint::read(&dir).unwrap_err();
     assert!(matches!(e, CheckpointError::NotACheckpoint { .. }), "{e}");

@@ -19,8 +19,8 @@
 //!   step per vertex, a colour at a time in parallel (bitwise the same on any thread count); a
 //!   sliver's short edge solved as a pair (`pairs.rs`); the fail-safe sweeps each path through the
 //!   collider and keeps a particle on its contact plane's side, or between two planes across a
-//!   pinch (`contact.rs`); optional body pokes held behind the cloth (`pokes.rs`), dihedral
-//!   bending (`bending.rs`) and a Provot limit for free-hanging sheets.
+//!   pinch (`contact.rs`); dihedral bending (`bending.rs`) and a Provot limit for free-hanging
+//!   sheets.
 //! - [`XpbdSim`] (`solver = "xpbd"`, `xpbd/`): small-step position-based dynamics, coloured
 //!   distance and dihedral constraints eight at a time in f32 lanes (`lanes.rs`, tested against
 //!   the f64 constraints), or the model's bend springs as compliant constraints (`springs.rs`).

@@ -457,24 +457,14 @@ pub fn lacking(
     };
     let vbd = scene.cloth.solver == SolverName::Vbd;
     let asks: &[(bool, Capabilities, &str)] = match which {
-        "body" => &[
-            (
-                vbd && scene.cloth.vbd.swept,
-                Capabilities {
-                    sweep: true,
-                    ..Capabilities::NONE
-                },
-                "[cloth.vbd] swept",
-            ),
-            (
-                vbd && scene.cloth.vbd.pokes,
-                Capabilities {
-                    pokes: true,
-                    ..Capabilities::NONE
-                },
-                "[cloth.vbd] pokes",
-            ),
-        ],
+        "body" => &[(
+            vbd && scene.cloth.vbd.swept,
+            Capabilities {
+                sweep: true,
+                ..Capabilities::NONE
+            },
+            "[cloth.vbd] swept",
+        )],
         _ => &[(
             scene.effects.fine_pokes,
             Capabilities {

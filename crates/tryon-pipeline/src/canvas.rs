@@ -118,6 +118,9 @@ pub fn drape(
     s.scene.settle = s.scene.settle.max(t);
     s.scene.duration = Some(t);
     s.output.referee_every = 0;
+    // The coarse cloth hangs; the surface stages would only cost time (and their output is not
+    // the garment's vertices).
+    s.effects.refine = 0;
     let mut p = crate::Pipeline::new(s)?;
     let frames = (t * scene.scene.fps).round().max(1.0) as usize;
     let out = p.run(Some(frames), |_, _| {});

@@ -76,8 +76,8 @@ impl DrapeConfig {
             "[scene]\nname = \"drape\"\nfps = {}\nduration = {}\nsettle = 0.0\n\
              [body]\nkind = \"sphere\"\nradius = 0.3\nsubdivisions = {}\n\
              [garment]\nkind = \"square\"\nparticles = {}\nsize = 1.0\ndrop_height = {}\n\
-             [cloth]\nmaterial = \"sheet\"\nthickness = {}\n\
-             [effects]\nfollow_body = false\n",
+             [cloth]\nsolver = \"p1\"\nmaterial = \"sheet\"\nthickness = {}\n\
+             [effects]\nfollow_body = false\nbody_collision = \"nearest_vertex\"\nrefine = 0\n",
             self.fps,
             self.duration,
             self.sphere_subdivisions,

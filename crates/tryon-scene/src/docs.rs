@@ -294,5 +294,6 @@ pub fn markdown() -> String {
             k.description
         ));
     }
+    s.push_str(&crate::fixes::markdown());
     s
 }

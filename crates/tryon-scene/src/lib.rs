@@ -1,13 +1,16 @@
 //! The scene file: TOML read with every key's position kept, the tables `[body]`, `[garment]` and
 //! `[motion]` read as the variant their `kind` names (each owning its keys), then every value
 //! checked against what it allows. Errors name the file, the line, the key and what is allowed.
-//! The schema is in `schema.rs`, `sections.rs` and `patterns.rs`; `docs.rs` writes its reference.
+//! The schema is in `schema.rs`, `sections.rs` and `patterns.rs`; `docs.rs` writes its reference,
+//! `fixes.rs` lists the keys that each fix one symptom. The defaults are the path the project
+//! recommends and measures (docs/decisions, *default path*): a scene file names what differs.
 
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
 mod check;
 pub mod docs;
+pub mod fixes;
 mod folds;
 mod patterns;
 mod read;

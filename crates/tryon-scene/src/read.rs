@@ -98,7 +98,7 @@ fn table_of<'i>(
 }
 
 /// Keys that moved into a table of their own: (table, old key, new table, new key).
-pub(super) const MOVED: [(&str, &str, &str, &str); 23] = [
+pub(super) const MOVED: [(&str, &str, &str, &str); 22] = [
     ("cloth", "integrator", "cloth.p1", "integrator"),
     ("cloth", "substep", "cloth.p1", "substep"),
     ("cloth", "max_strain", "cloth.p1", "max_strain"),
@@ -127,7 +127,6 @@ pub(super) const MOVED: [(&str, &str, &str, &str); 23] = [
     ("cloth", "vbd_dihedral", "cloth.vbd", "dihedral"),
     ("cloth", "vbd_contact", "cloth.vbd", "contact"),
     ("cloth", "vbd_swept", "cloth.vbd", "swept"),
-    ("cloth", "vbd_pokes", "cloth.vbd", "pokes"),
     ("cloth", "vbd_limit", "cloth.vbd", "limit"),
     ("cloth", "vbd_limit_passes", "cloth.vbd", "limit_passes"),
     ("effects", "sdf_resolution", "effects.sdf", "resolution"),
@@ -139,8 +138,47 @@ pub(super) const MOVED: [(&str, &str, &str, &str); 23] = [
     ),
 ];
 
+/// What a retired key did, and what does its job now.
+const POKES_RETIRED: &str = "nothing: the coarse cloth's pokes were retired (off everywhere); \
+    `[effects] fine_pokes` lifts the output surface over narrow body features \
+    (docs/decisions, *fine pokes*)";
+
+/// Keys that were retired: (table, the key's path inside it, what is allowed instead).
+pub(super) const RETIRED: [(&str, &[&str], &str); 2] = [
+    ("cloth", &["vbd", "pokes"], POKES_RETIRED),
+    ("cloth", &["vbd_pokes"], POKES_RETIRED),
+];
+
+/// An error for a retired key of `table` (the scene's table `name`).
+fn retired(text: &str, file: &Path, name: &str, table: &DeTable<'_>) -> Result<(), SceneError> {
+    for (_, path, instead) in RETIRED.iter().filter(|r| r.0 == name) {
+        let mut at = table;
+        for (depth, part) in path.iter().enumerate() {
+            let Some((key, value)) = at.iter().find(|(k, _)| k.get_ref().as_ref() == *part) else {
+                break;
+            };
+            if depth + 1 == path.len() {
+                return Err(invalid(
+                    text,
+                    file,
+                    key.span().start,
+                    &format!("{name}.{}", path.join(".")),
+                    "a retired key".into(),
+                    instead.to_string(),
+                ));
+            }
+            match value.get_ref() {
+                DeValue::Table(t) => at = t,
+                _ => break,
+            }
+        }
+    }
+    Ok(())
+}
+
 /// An error naming the new place of a key that moved into a table of its own.
 fn moved(text: &str, file: &Path, name: &str, table: &DeTable<'_>) -> Result<(), SceneError> {
+    retired(text, file, name, table)?;
     for key in table.keys() {
         let k: &str = key.get_ref().as_ref();
         if let Some((_, _, to, new)) = MOVED.iter().find(|m| m.0 == name && m.1 == k) {

@@ -136,13 +136,14 @@ impl From<WrinkleModelName> for wrinkle::WrinkleModel {
 pub enum SolverName {
     /// P1's sparse-particle cloth (cloth-dyn's `ClothSim`): springs integrated by `integrator`,
     /// Provot's strain limit, collision and friction between substeps.
-    #[default]
     P1,
     /// Extended position-based dynamics with small substeps (cloth-dyn's `XpbdSim`): distance
     /// and dihedral constraints with compliance, body contact and friction inside every substep.
     Xpbd,
     /// Vertex block descent (cloth-dyn's `VbdSim`): the implicit step's energy (inertia, springs,
-    /// body contact with friction) minimised vertex by vertex, colour by colour.
+    /// body contact with friction) minimised vertex by vertex, colour by colour. The default
+    /// (docs/decisions, *solver: vbd*).
+    #[default]
     Vbd,
 }
 
@@ -187,7 +188,8 @@ impl SolverName {
 pub enum CollisionMethod {
     /// P1's nearest-vertex tracking.
     NearestVertex,
-    /// Closest point on the whole mesh (parry): the referee, slow but exact.
+    /// Closest point on the whole mesh (parry), as the referee judges: the default
+    /// (docs/decisions, *collider: exact on real scenes*).
     Exact,
     /// P3's signed distance grid (trilinear), rebuilt when the body moves.
     Sdf,
@@ -225,7 +227,8 @@ pub struct EffectsSection {
     /// Coulomb friction coefficient at body contacts; 0 turns friction off.
     #[schemars(range(min = 0.0, max = 5.0))]
     pub friction: Real,
-    /// How the cloth collides with the body.
+    /// How the cloth collides with the body (`nearest_vertex` is P1's, cheaper on the
+    /// mannequin).
     pub body_collision: CollisionMethod,
     /// Collider of the fine surface (P1.4.2); the body collider's method when absent (`none` is
     /// not allowed: turn `fine_collision` off instead).
@@ -307,14 +310,14 @@ impl Default for EffectsSection {
             air_drag: env.air_drag,
             wind: env.wind.to_vec(),
             friction: env.friction,
-            body_collision: CollisionMethod::NearestVertex,
+            body_collision: CollisionMethod::Exact,
             fine_collider: None,
             follow_body: true,
             body_press: true,
             self_collision: false,
             cloth_collision: false,
             velocity_damping: env.velocity_damping,
-            refine: 0,
+            refine: 1,
             // The surface stages a refined scene gets unless it says otherwise: fine collision
             // and blended normals on, the wrinkle model (the costly one) off.
             fine_collision: true,

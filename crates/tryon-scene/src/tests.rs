@@ -314,18 +314,18 @@ fn an_old_flat_solver_key_is_refused_naming_its_new_table() {
 
 #[test]
 fn self_collision_asks_for_the_vbd_solver_and_a_thickness_in_range() {
+    // VBD is the default solver; another is refused.
     let text = minimal("effects", None, "self_collision = true\n");
-    let e = Scene::parse(&text, Path::new("m.toml"))
+    let p1 = text.replace("[cloth]\n", "[cloth]\nsolver = \"p1\"\n");
+    let e = Scene::parse(&p1, Path::new("m.toml"))
         .unwrap_err()
         .to_string();
     assert!(
         e.contains("effects.self_collision") && e.contains("vbd"),
         "{e}"
     );
-    let text = text.replace(
-        "[cloth]\n",
-        "[cloth]\nsolver = \"vbd\"\nself_thickness = 0.05\n",
-    );
+    assert!(Scene::parse(&text, Path::new("m.toml")).is_ok());
+    let text = text.replace("[cloth]\n", "[cloth]\nself_thickness = 0.05\n");
     let e = Scene::parse(&text, Path::new("m.toml"))
         .unwrap_err()
         .to_string();
@@ -491,4 +491,39 @@ fn an_error_under_overrides_names_the_files_own_line_or_the_override() {
     };
     assert_eq!((key.as_str(), *line), ("effects.refine", None), "{e}");
     assert!(e.to_string().contains("--set effects.refine=9"), "{e}");
+}
+
+#[test]
+fn a_retired_key_is_refused_saying_what_does_its_job_now() {
+    let text = minimal("cloth.vbd", None, "pokes = true\n");
+    let e = Scene::parse(&text, Path::new("m.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("cloth.vbd.pokes") && e.contains("retired") && e.contains("fine_pokes"),
+        "{e}"
+    );
+    let flat = minimal("cloth", None, "vbd_pokes = true\n");
+    let e = Scene::parse(&flat, Path::new("m.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("cloth.vbd_pokes") && e.contains("retired"),
+        "{e}"
+    );
+    let plain = minimal("cloth", None, "");
+    let sets = ["cloth.vbd.pokes=true".to_string()];
+    let e = Scene::parse_with_overrides(&plain, Path::new("m.toml"), &sets)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("retired"), "{e}");
+    // A key beside it is still read.
+    let ok = minimal("cloth.vbd", None, "swept = false\n");
+    assert!(
+        !Scene::parse(&ok, Path::new("m.toml"))
+            .unwrap()
+            .cloth
+            .vbd
+            .swept
+    );
 }

@@ -18,7 +18,6 @@ mod forces;
 mod layers;
 mod linalg;
 mod pairs;
-mod pokes;
 mod sweep;
 
 /// Fewest vertices a thread takes at once in a colour's sweep: below this the hand-over costs more
@@ -77,9 +76,6 @@ pub struct VbdParams {
     /// Passes of that limit per step.
     #[schemars(range(min = 1, max = 100))]
     pub limit_passes: u32,
-    /// Body vertices under cloth triangles held 1 mm behind the cloth, so narrow features do
-    /// not poke through between particles (off: docs/decisions, *fine pokes*).
-    pub pokes: bool,
 }
 
 impl Default for VbdParams {
@@ -96,7 +92,6 @@ impl Default for VbdParams {
             swept: true,
             limit: 0.0,
             limit_passes: 8,
-            pokes: false,
         }
     }
 }
@@ -168,9 +163,6 @@ pub struct VbdSim {
     held: Vec<Option<Plane>>,
     /// The contact planes the strain limit keeps particles outside of.
     limit_planes: Vec<ContactPlane>,
-    /// Body vertices under cloth triangles, found at the first step of each frame.
-    pokes: pokes::Pokes,
-    pokes_stale: bool,
     /// The cloth's contacts with itself (`with_self_contact`), and what untangling the starting
     /// shape did (`None` until the first step).
     layers: Option<SelfContacts>,
@@ -224,7 +216,9 @@ impl VbdSim {
         let hinges = bending::Hinges::new(rest, &model.triangles, vbd.dihedral);
         let mut neighbours = pairs::neighbours(&offsets, &arms, &blocks);
         hinges.add_neighbours(&blocks, &mut neighbours);
-        // A poke's energy couples a triangle's corners.
+        // A triangle's corners are coloured apart. The retired coarse pokes coupled them (an
+        // energy on a triangle's three corners); the colouring stays, as another one changes
+        // every VBD result (docs/decisions, *fine pokes*).
         let stencils: Vec<[u32; 4]> = model
             .triangles
             .iter()
@@ -266,8 +260,6 @@ impl VbdSim {
             spring_sum,
             held: vec![None; n],
             limit_planes: Vec::new(),
-            pokes: pokes::Pokes::default(),
-            pokes_stale: true,
             layers: None,
             untangled: None,
         }
@@ -335,13 +327,6 @@ impl VbdSim {
         let prev = std::mem::take(&mut self.prev);
         self.pinches(&prev, collider);
         self.hinges.begin(&prev);
-        if self.vbd.pokes && self.pokes_stale {
-            let planes = &self.planes;
-            let tris = &self.model.triangles;
-            self.pokes
-                .find(collider, &prev, tris, |k| planes[k].map(|p| p.normal));
-            self.pokes_stale = false;
-        }
         self.prev = prev;
     }
 
@@ -374,10 +359,6 @@ impl VbdSim {
         }
         self.hinges.add(i, &mut f, &mut o);
         self.add_anchor(i, xi, &mut f, &mut iso);
-        let kp = pokes::POKE_OVER_CONTACT * self.penalty(i);
-        let tris = &self.model.triangles;
-        self.pokes
-            .add(x, tris, i, (kp, pokes::POKE_GAP), &mut f, &mut o);
         let mut hess = Mat3::new(
             o[0] + iso,
             o[1],
@@ -555,9 +536,6 @@ impl ClothSolver for VbdSim {
         self.layers_frame_start(&mut frame.positions, collider);
         let (longest, max_speed) = (self.vbd.substep, self.params.max_speed);
         let mut backup = std::mem::take(&mut self.backup);
-        // The body moved before this call (the collider's update): its vertices under the cloth
-        // are found again at the first step.
-        self.pokes_stale = true;
         // The body is at its new shape for the whole frame (it moved at the collider's update).
         let step =
             |f: &mut CoarseFrame, t: Real, h: Real| self.step(f, (t, h), [1.0, 1.0], collider);
@@ -594,7 +572,5 @@ impl ClothSolver for VbdSim {
 
 #[cfg(test)]
 mod layer_tests;
-#[cfg(test)]
-mod poke_tests;
 #[cfg(test)]
 mod tests;
