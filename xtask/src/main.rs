@@ -5,6 +5,7 @@ mod drape;
 mod fuzz;
 mod fuzz_mutate;
 mod outputs;
+mod realtime;
 mod tidy;
 mod viewer;
 
@@ -16,6 +17,9 @@ commands:
   ci                 cargo fmt --check, clippy -D warnings, tidy, fuzz --quick, all tests,
                      tradeoff --quick
   bench [ARGS..]     criterion benchmarks (cargo bench -p tryon-benches -p tryon-cli -- ARGS)
+  bench --realtime [ARGS..]
+                     the product's speed (benches/realtime.rs) pinned to one core; its table
+                     goes into docs/speed.md beside the previous one
   drape [N..] [--integrator rk4|symplectic_euler|all] [--frames F] [--trace] [--set KEY=VALUE] [--png FILE]
                      run the drape scene (release) and print ms/frame, stretch, penetration
   tradeoff [--quick] [--summary FILE]
@@ -106,34 +110,51 @@ fn install_gltf_validator() -> Result<(), String> {
     }
 }
 
+/// Runs `f`, then says how long it took (CI's time is a target: under 30 minutes).
+fn timed<T>(what: &str, f: impl FnOnce() -> Result<T, String>) -> Result<T, String> {
+    let t0 = std::time::Instant::now();
+    let r = f();
+    eprintln!("xtask: {what}: {:.0} s", t0.elapsed().as_secs_f64());
+    r
+}
+
 fn ci() -> Result<(), String> {
-    install_gltf_validator()?;
-    // The viewer's packages (the browser test drives Chromium with playwright-core), and the
-    // committed page bundle current with its sources.
-    viewer::check()?;
+    timed("npm", || {
+        install_gltf_validator()?;
+        // The viewer's packages (the browser test drives Chromium with playwright-core), and the
+        // committed page bundle current with its sources.
+        viewer::check()
+    })?;
     cargo(&["fmt", "--all", "--", "--check"])?;
-    cargo(&[
-        "clippy",
-        "--workspace",
-        "--all-targets",
-        "--",
-        "-D",
-        "warnings",
-    ])?;
+    timed("clippy", || {
+        cargo(&[
+            "clippy",
+            "--workspace",
+            "--all-targets",
+            "--",
+            "-D",
+            "warnings",
+        ])
+    })?;
     tidy::run()?;
     // Every reader through a few thousand mutated real files (the full run is `cargo xtask fuzz`).
-    fuzz::run(&["--quick".to_string()])?;
+    timed("fuzz --quick", || fuzz::run(&["--quick".to_string()]))?;
     // Every test, and every benchmark once as a test (`--all-targets` takes the benches in test
-    // mode), so they cannot rot; nothing else runs them again.
-    let (passed, failed) = cargo_test_tally(&["test", "--workspace", "--all-targets"])?;
+    // mode), so they cannot rot; nothing else runs them again. In the tools profile xtask itself
+    // was built in, so the workspace is compiled once.
+    let (passed, failed) = timed("tests", || {
+        cargo_test_tally(&["test", "--workspace", "--all-targets", "--profile", "tools"])
+    })?;
     println!("tests: {passed} passed, {failed} failed");
     if failed == 0 {
         // The trade-off sweeps at a few frames: every curve must have points.
-        tradeoff(&[
-            "--quick".to_string(),
-            "--out".into(),
-            "target/tradeoff-quick".into(),
-        ])?;
+        timed("tradeoff --quick", || {
+            tradeoff(&[
+                "--quick".to_string(),
+                "--out".into(),
+                "target/tradeoff-quick".into(),
+            ])
+        })?;
     }
     if failed > 0 {
         Err(format!("{failed} test(s) failed"))
@@ -180,6 +201,9 @@ fn cargo_test_tally(args: &[&str]) -> Result<(u64, u64), String> {
 }
 
 fn bench(args: &[String]) -> Result<(), String> {
+    if args.first().is_some_and(|a| a == "--realtime") {
+        return realtime::run(&args[1..]);
+    }
     // tryon-cli's bench runs the `tryon` binary (`tryon batch`).
     let mut a = vec!["bench", "-p", "tryon-benches", "-p", "tryon-cli", "--"];
     a.extend(args.iter().map(String::as_str));
