@@ -143,7 +143,14 @@ fn ci() -> Result<(), String> {
     // mode), so they cannot rot; nothing else runs them again. In the tools profile xtask itself
     // was built in, so the workspace is compiled once.
     let (passed, failed) = timed("tests", || {
-        cargo_test_tally(&["test", "--workspace", "--all-targets", "--profile", "tools"])
+        cargo_test_tally(&[
+            "test",
+            "--workspace",
+            "--all-targets",
+            "--profile",
+            "tools",
+            "--no-fail-fast",
+        ])
     })?;
     println!("tests: {passed} passed, {failed} failed");
     if failed == 0 {

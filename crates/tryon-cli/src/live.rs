@@ -27,6 +27,13 @@ impl Source {
         let text = format!("{}\n{folds}", self.text);
         let mut s = Scene::parse_with_overrides(&text, &self.file, &self.sets)
             .map_err(|e| e.to_string())?;
+        // Drawn lines are carried to the garment the live scene started from. A scene without
+        // folds of its own started undraped (`[folding] drape` acts on folded scenes), so its
+        // drawn folds go on the garment as placed, where their points lie, not on a drape of it.
+        let drawn = folds.matches("[[fold]]").count();
+        if drawn > 0 && s.fold.len() == drawn {
+            s.folding.drape = 0.0;
+        }
         if self.from_file {
             s.source = Some(self.file.clone());
         }
