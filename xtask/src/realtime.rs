@@ -65,28 +65,13 @@ fn read_json(path: &Path) -> Result<Value, String> {
 
 /// The bench's figures with when and where they were measured.
 fn stamped(scenes: Value, pinned: bool) -> Value {
-    let date = Command::new("date")
-        .arg("+%Y-%m-%d")
-        .output()
-        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
-        .unwrap_or_default();
-    let cpu = std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|t| {
-            t.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split_once(':'))
-                .map(|(_, m)| m.trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown CPU".into());
-    let cores = std::thread::available_parallelism().map_or(0, |n| n.get());
     let pin = match pinned {
         true => "one thread pinned to core 1",
         false => "one thread (taskset missing: not pinned)",
     };
     serde_json::json!({
-        "date": date,
-        "machine": format!("{cpu}, {cores} cores; {pin}; release build"),
+        "date": tryon_io::machine::today(),
+        "machine": format!("{}; {pin}; release build", tryon_io::machine::description()),
         "scenes": scenes,
     })
 }

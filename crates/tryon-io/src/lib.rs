@@ -12,6 +12,7 @@ pub mod glb;
 mod glb_layout;
 pub mod inspect;
 pub mod live_frame;
+pub mod machine;
 pub mod makehuman;
 pub mod obj;
 pub mod preview;

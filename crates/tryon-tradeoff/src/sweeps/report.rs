@@ -3,40 +3,6 @@
 
 use super::*;
 
-/// Today's date (UTC) as yyyy-mm-dd, from the system clock.
-fn today() -> String {
-    let secs = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| d.as_secs());
-    let days = (secs / 86_400) as i64;
-    // Howard Hinnant's civil-from-days.
-    let z = days + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z - era * 146_097;
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let d = doy - (153 * mp + 2) / 5 + 1;
-    let m = if mp < 10 { mp + 3 } else { mp - 9 };
-    let y = yoe + era * 400 + i64::from(m <= 2);
-    format!("{y:04}-{m:02}-{d:02}")
-}
-
-/// The CPU model and core count, from /proc (Linux) when readable.
-fn machine() -> String {
-    let cpu = std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|t| {
-            t.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split_once(':'))
-                .map(|(_, v)| v.trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown CPU".into());
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    format!("{cpu}, {cores} cores available")
-}
-
 /// The cheapest collider setting of a scene with max penetration <= 1 mm and stretch <= 1.03.
 fn cheapest(points: &[ColliderPoint], scene: &str) -> String {
     let ok: Vec<&ColliderPoint> = points
@@ -240,8 +206,8 @@ pub fn run_all(quick: bool, out: &Path, summary: Option<&Path>) -> Result<(), St
     let _ = writeln!(
         r,
         "Machine: {}. Date: {}. Sweep time {:.0} s. Times are means per frame of one run on a noisy machine; compare them as ratios.\n",
-        machine(),
-        today(),
+        tryon_io::machine::description(),
+        tryon_io::machine::today(),
         started.elapsed().as_secs_f64()
     );
     let _ = writeln!(r, "## (a) Colliders\n");
@@ -388,16 +354,4 @@ fn write_atomic(path: &Path, text: &str) -> Result<(), String> {
     let tmp = path.with_extension("md.tmp");
     std::fs::write(&tmp, text).map_err(|e| format!("{}: {e}", tmp.display()))?;
     std::fs::rename(&tmp, path).map_err(|e| format!("{}: {e}", path.display()))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn dates_are_civil() {
-        let d = today();
-        assert_eq!(d.len(), 10);
-        assert!(d.starts_with("20"), "{d}");
-    }
 }
