@@ -1,9 +1,13 @@
 //! The exact referee: the closest point on the whole body triangle mesh, found through a bounding
-//! volume hierarchy of the triangles (parry3d-f64's `Bvh`), with inside tests by angle-weighted
-//! pseudo-normals at the closest feature (Baerentzen and Aanaes 2005). Slow but right; it judges
-//! every other collider. The hierarchy is built once and refitted to each new shape (its leaves'
-//! boxes updated, its tree kept): rebuilding it every frame was a fifth of the demo's wall time.
-//! Its answers are checked against parry's own oriented `TriMesh` queries (tests).
+//! volume hierarchy of the triangles ([`FaceTree`]: eight-wide, f32 boxes padded outward, f64
+//! triangle tests), with inside tests by angle-weighted pseudo-normals at the closest feature
+//! (Baerentzen and Aanaes 2005), made for the corner a query lands on rather than for every vertex
+//! at every update. It judges every other collider. The hierarchy is built once and refitted to
+//! each new shape. Its answers are checked against parry's own oriented `TriMesh` queries (tests).
+//!
+//! A caller that needs only the surface within some distance (`probe_near` within the solver's
+//! reach, `resolve` within the thickness) gets a search that goes no farther
+//! ([`ExactCollider::search`]); what it finds nearer is the whole search's answer.
 //!
 //! Queries over a point set (`probe`, `resolve`, `signed_distances`) run in parallel and remember
 //! what they found: a point asked again where it was, on the same shape of the body, gets the same
@@ -17,13 +21,13 @@
 //! fast limb would carry through is stopped. It has no pinch search (`probe_opposite`): one was
 //! built and measured, and it stretched the real garments more (docs/decisions, *collider: exact on real scenes*).
 
+mod memo;
+
+pub use memo::Near;
+
 use crate::body::{BodyError, BodyMesh};
+use crate::facetree::FaceTree;
 use crate::swept::SweptBody;
-use parry3d_f64::bounding_volume::Aabb;
-use parry3d_f64::math::Point;
-use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy};
-use parry3d_f64::query::PointQuery;
-use rayon::prelude::*;
 use tryon_core::frames::{BodyFrame, Contact};
 use tryon_core::math::{Real, Vec3, closest_point_on_triangle, is_finite};
 use tryon_core::mesh::PolyMesh;
@@ -35,47 +39,19 @@ const PAR_CHUNK: usize = 64;
 /// No face: a border edge's missing neighbour, or no starting face for [`ExactCollider::project_from`].
 pub const NONE: u32 = u32::MAX;
 
-/// What was found is kept for this many point sets (told apart by their length): a scene probes
-/// its coarse particles and its fine vertices in turn, and each keeps its own.
-const MEMO_SETS: usize = 4;
-
-/// What was found for the points of one set: per point, where it was queried, on which shape of
-/// the body ([`ExactCollider::shape`]), and the projection. A point queried again where it was,
-/// on the same shape, gets the same answer without a search (the cloth solver probes its
-/// particles where the last step's fail-safe left them); any other starts its search from the
-/// face found last time.
-#[derive(Clone, Default, serde::Serialize, serde::Deserialize)]
-struct Memo {
-    at: Vec<Vec3>,
-    shape: Vec<u64>,
-    found: Vec<Option<Projection>>,
-}
-
-impl Memo {
-    fn new(n: usize) -> Self {
-        Memo {
-            at: vec![Vec3::repeat(Real::NAN); n],
-            shape: vec![u64::MAX; n],
-            found: vec![None; n],
-        }
-    }
-}
-
 /// Exact point-mesh collider (the referee).
 #[derive(Clone, serde::Serialize, serde::Deserialize)]
 pub struct ExactCollider {
     pub body: BodyMesh,
     /// Distance the cloth keeps from the body surface (m).
     pub thickness: Real,
-    bvh: Bvh,
+    tree: FaceTree,
     /// Per triangle, the triangle across each edge (edge k joins corners k and k + 1), or [`NONE`].
     across: Vec<[u32; 3]>,
-    /// Angle-weighted pseudo-normal of each vertex for the current shape (not unit).
-    vertex_normals: Vec<Vec3>,
     /// The body's last move, for the swept test.
     swept: SweptBody,
     /// What was found for recent point sets.
-    memos: Vec<Memo>,
+    memos: Vec<memo::Memo>,
     /// Counts the body's changes of shape.
     shape: u64,
 }
@@ -99,18 +75,7 @@ pub struct Projection {
 }
 
 /// A face's nearest point to a query: squared distance, the point, its barycentric coordinates.
-type Nearest = (Real, (Vec3, [Real; 3]));
-
-/// The box of a triangle (empty for non-finite corners, so it is never visited).
-fn triangle_box([a, b, c]: [Vec3; 3]) -> Aabb {
-    if !(is_finite(&a) && is_finite(&b) && is_finite(&c)) {
-        return Aabb::new_invalid();
-    }
-    Aabb::new(
-        Point::from(a.inf(&b).inf(&c)),
-        Point::from(a.sup(&b).sup(&c)),
-    )
-}
+pub(super) type Nearest = (Real, (Vec3, [Real; 3]));
 
 /// For every triangle, the triangle across each of its edges (the first other one found).
 fn neighbours(triangles: &[[u32; 3]]) -> Vec<[u32; 3]> {
@@ -140,46 +105,38 @@ impl ExactCollider {
     /// A referee for a body mesh in its current shape.
     pub fn new(mesh: &PolyMesh, thickness: Real) -> Result<Self, BodyError> {
         let body = BodyMesh::new(mesh)?;
-        let boxes: Vec<Aabb> = (0..body.triangles.len())
-            .map(|f| triangle_box(body.corners(f)))
-            .collect();
-        let mut c = ExactCollider {
-            bvh: Bvh::from_leaves(BvhBuildStrategy::Binned, &boxes),
+        Ok(ExactCollider {
+            tree: FaceTree::new(&body.positions, &body.triangles),
             across: neighbours(&body.triangles),
-            vertex_normals: Vec::new(),
             swept: SweptBody::default(),
             memos: Vec::new(),
             shape: 0,
             body,
             thickness,
-        };
-        c.pseudo_normals();
-        Ok(c)
+        })
     }
 
-    /// The vertices' angle-weighted pseudo-normals for the current shape: each face's corner
-    /// angles found in parallel, summed into the vertices in face order (the same sums on any
-    /// thread count).
-    fn pseudo_normals(&mut self) {
+    /// Vertex `v`'s angle-weighted pseudo-normal (not unit) for the current shape: its faces'
+    /// normals weighted by their corner angles at `v`, summed in face order. Made when a query's
+    /// nearest point is that corner, not for every vertex at every update (the angles' `acos`
+    /// calls were a tenth of the MakeHuman frame).
+    fn vertex_pseudo_normal(&self, v: u32) -> Vec3 {
         let body = &self.body;
-        let angles: Vec<[Real; 3]> = (0..body.triangles.len())
-            .into_par_iter()
-            .with_min_len(PAR_CHUNK * 4)
-            .map(|f| {
-                let c = body.corners(f);
-                std::array::from_fn(|k| (c[(k + 1) % 3] - c[k]).angle(&(c[(k + 2) % 3] - c[k])))
-            })
-            .collect();
-        let n = &mut self.vertex_normals;
-        n.clear();
-        n.resize(body.positions.len(), Vec3::zeros());
-        for ((t, normal), angle) in body.triangles.iter().zip(&body.face_normals).zip(angles) {
+        let mut n = Vec3::zeros();
+        for &f in body.vertex_faces.row(v as usize) {
+            let t = body.triangles[f as usize];
+            let c = body.corners(f as usize);
             for k in 0..3 {
-                if angle[k].is_finite() {
-                    n[t[k] as usize] += normal * angle[k];
+                if t[k] != v {
+                    continue;
+                }
+                let angle = (c[(k + 1) % 3] - c[k]).angle(&(c[(k + 2) % 3] - c[k]));
+                if angle.is_finite() {
+                    n += body.face_normals[f as usize] * angle;
                 }
             }
         }
+        n
     }
 
     /// The outward pseudo-normal at the feature of triangle `f` that `bary` lies on: a corner's
@@ -190,7 +147,7 @@ impl ExactCollider {
         let on = [bary[0] > 0.0, bary[1] > 0.0, bary[2] > 0.0];
         match on.iter().filter(|&&b| b).count() {
             // One corner: its vertex.
-            1 => self.vertex_normals[t[on.iter().position(|&b| b).unwrap_or(0)] as usize],
+            1 => self.vertex_pseudo_normal(t[on.iter().position(|&b| b).unwrap_or(0)]),
             // An edge: the corner off it is the zero one; edge k joins corners k and k + 1.
             2 => {
                 let off = on.iter().position(|&b| !b).unwrap_or(0);
@@ -242,102 +199,64 @@ impl ExactCollider {
     /// found for it last time, or [`NONE`]): the hierarchy is searched only for faces nearer than
     /// that one, which is much of the search when the point has hardly moved.
     pub fn project_from(&self, p: &Vec3, hint: u32) -> Option<Projection> {
-        if !is_finite(p) {
-            return None;
+        match self.search(p, hint, Real::INFINITY) {
+            Near::Found(pr) => Some(pr),
+            _ => None,
         }
-        let point = Point::from(*p);
-        let closest = |f: u32| {
-            let [a, b, c] = self.body.corners(f as usize);
-            let (q, w) = closest_point_on_triangle(p, &a, &b, &c);
-            ((q - p).norm_squared(), (q, w))
-        };
+    }
+
+    /// [`ExactCollider::project_from`] for a caller that only needs the surface nearer than
+    /// `cutoff`: the hierarchy is searched only that far, so a point far from the body costs a
+    /// few boxes instead of a descent to its nearest face. A point with nothing within `cutoff`
+    /// is [`Near::Beyond`] when the hint's face says it is outside (its nearest feature's
+    /// pseudo-normal); when it says inside, or there is no hint, the whole body is searched, so
+    /// a point deep inside is still found. Whatever is found nearer than `cutoff` is the same
+    /// as the whole search's answer.
+    pub fn search(&self, p: &Vec3, hint: u32, cutoff: Real) -> Near {
+        if !is_finite(p) {
+            return Near::Invalid;
+        }
+        let closest = |f: u32| self.nearest_on(p, f);
         // A hint that gives no finite distance (a face collapsed by the pose) is no start.
         let start = ((hint as usize) < self.body.triangles.len())
             .then(|| (hint, closest(hint)))
             .filter(|(_, (d2, _))| d2.is_finite());
-        let bound = start.map_or(Real::INFINITY, |(_, (d2, _))| d2);
-        let found = self.bvh.find_best(
-            bound,
-            |node, _| {
-                let d = node.aabb().distance_to_local_point(&point, true);
-                d * d
-            },
-            |f, _| Some(closest(f)),
-        );
-        let (face, (d2, (q, bary))) = found.or(start)?;
-        let (face, (d2, (q, bary))) = self.on_lower_face(face, (d2, (q, bary)), closest);
+        let hint_d2 = start.map_or(Real::INFINITY, |(_, (d2, _))| d2);
+        let bound = hint_d2.min(cutoff * cutoff);
+        let found = self.tree.nearest(p, bound, closest);
+        let best = found.or(start.filter(|_| hint_d2 < cutoff * cutoff));
+        let Some((face, nearest)) = best else {
+            return match start {
+                Some((f, (_, (q, bary)))) if (p - q).dot(&self.pseudo_normal(f, bary)) >= 0.0 => {
+                    Near::Beyond(cutoff)
+                }
+                _ if cutoff.is_finite() => self.search(p, hint, Real::INFINITY),
+                _ => Near::Invalid,
+            };
+        };
+        Near::Found(self.finish(p, face, nearest))
+    }
+
+    /// Face `f`'s nearest point to `p`: squared distance, the point, its barycentric coordinates.
+    pub(super) fn nearest_on(&self, p: &Vec3, f: u32) -> Nearest {
+        let [a, b, c] = self.body.corners(f as usize);
+        let (q, w) = closest_point_on_triangle(p, &a, &b, &c);
+        ((q - p).norm_squared(), (q, w))
+    }
+
+    /// The projection of `p` whose nearest face is `face`: the edge's lower face taken, and the
+    /// sign from the pseudo-normal at the feature.
+    pub(super) fn finish(&self, p: &Vec3, face: u32, nearest: Nearest) -> Projection {
+        let closest = |f: u32| self.nearest_on(p, f);
+        let (face, (d2, (q, bary))) = self.on_lower_face(face, nearest, closest);
         let d = d2.sqrt();
         let inside = d > 0.0 && (p - q).dot(&self.pseudo_normal(face, bary)) < 0.0;
-        Some(Projection {
+        Projection {
             distance: if inside { -d } else { d },
             point: q,
             face,
             bary,
-        })
-    }
-}
-
-impl ExactCollider {
-    /// The memo of point sets of `n` points, taken out (put back with `put_memo`); a new set
-    /// has none, and the oldest is dropped when [`MEMO_SETS`] are kept.
-    fn take_memo(&mut self, n: usize) -> Memo {
-        match self.memos.iter().position(|m| m.at.len() == n) {
-            Some(k) => self.memos.remove(k),
-            None => Memo::new(n),
         }
-    }
-
-    fn put_memo(&mut self, memo: Memo) {
-        if self.memos.len() >= MEMO_SETS {
-            self.memos.remove(0);
-        }
-        self.memos.push(memo);
-    }
-
-    /// Each listed point's projection (all points for `None`), in parallel: the memo's answer for
-    /// a point queried at the same place on the same shape, else a search from the face found
-    /// for it last time (the same answer from any start, to the bit: `on_lower_face`).
-    fn project_all(&mut self, points: &[Vec3], which: Option<&[u32]>) -> Vec<Option<Projection>> {
-        let mut memo = self.take_memo(points.len());
-        let (this, m) = (&*self, &memo);
-        let one = |k: usize| {
-            let p = &points[k];
-            let same =
-                m.shape[k] == this.shape && (0..3).all(|a| p[a].to_bits() == m.at[k][a].to_bits());
-            if same {
-                m.found[k]
-            } else {
-                this.project_from(p, m.found[k].map_or(NONE, |f| f.face))
-            }
-        };
-        let found: Vec<Option<Projection>> = match which {
-            Some(w) => w
-                .par_iter()
-                .with_min_len(PAR_CHUNK)
-                .map(|&k| one(k as usize))
-                .collect(),
-            None => (0..points.len())
-                .into_par_iter()
-                .with_min_len(PAR_CHUNK)
-                .map(one)
-                .collect(),
-        };
-        for (j, pr) in found.iter().enumerate() {
-            let k = which.map_or(j, |w| w[j] as usize);
-            (memo.at[k], memo.shape[k], memo.found[k]) = (points[k], self.shape, *pr);
-        }
-        self.put_memo(memo);
-        found
-    }
-
-    /// Signed distances of all `points` (`None` where there is none), as
-    /// [`Collider::signed_distance`] gives them, found from the faces of the last call for a set
-    /// of this length: the referee's per-frame query.
-    pub fn signed_distances(&mut self, points: &[Vec3]) -> Vec<Option<Real>> {
-        self.project_all(points, None)
-            .into_iter()
-            .map(|pr| pr.map(|pr| pr.distance))
-            .collect()
     }
 }
 
@@ -364,18 +283,14 @@ impl Collider for ExactCollider {
         if self.body.set_frame(frame).is_err() {
             return;
         }
-        for f in 0..self.body.triangles.len() {
-            let b = triangle_box(self.body.corners(f));
-            self.bvh.insert_or_update_partially(b, f as u32, 0.0);
-        }
-        self.bvh.refit_without_opt();
-        self.pseudo_normals();
+        self.tree.refit(&self.body.positions, &self.body.triangles);
     }
 
     fn resolve(&mut self, points: &mut [Vec3], contacts: &mut Vec<Contact>) {
-        let found = self.project_all(points, None);
-        for (i, (p, pr)) in points.iter_mut().zip(found).enumerate() {
-            let Some(pr) = pr else {
+        // Only points nearer than the thickness move: the search goes no farther.
+        let found = self.project_all(points, None, self.thickness);
+        for (i, (p, near)) in points.iter_mut().zip(found).enumerate() {
+            let Near::Found(pr) = near else {
                 continue;
             };
             if pr.distance >= self.thickness {
@@ -448,12 +363,17 @@ impl Collider for ExactCollider {
     }
 
     fn probe(&mut self, points: &[Vec3], which: &[u32], out: &mut Vec<Probe>) {
-        // Each point on its own, in parallel, from the face found for it last time; collected
-        // in order, and the faces kept for next time.
-        let found = self.project_all(points, Some(which));
+        self.probe_near(points, which, Real::INFINITY, out);
+    }
+
+    /// Each point on its own, in parallel, from the face found for it last time, searched no
+    /// farther than `reach` ([`ExactCollider::search`]); collected in order, and the faces kept
+    /// for next time. A point with no surface within `reach` gets `reach` as its distance.
+    fn probe_near(&mut self, points: &[Vec3], which: &[u32], reach: Real, out: &mut Vec<Probe>) {
+        let found = self.project_all(points, Some(which), reach);
         out.clear();
-        out.extend(which.iter().zip(found).map(|(&k, pr)| match pr {
-            Some(pr) => Probe {
+        out.extend(which.iter().zip(found).map(|(&k, near)| match near {
+            Near::Found(pr) => Probe {
                 distance: pr.distance,
                 normal: if pr.distance.abs() > 1e-12 {
                     (points[k as usize] - pr.point) / pr.distance
@@ -461,7 +381,11 @@ impl Collider for ExactCollider {
                     self.body.face_normals[pr.face as usize]
                 },
             },
-            None => Probe::FAR,
+            Near::Beyond(d) => Probe {
+                distance: d,
+                normal: Vec3::zeros(),
+            },
+            Near::Invalid => Probe::FAR,
         }));
     }
 }

@@ -10,9 +10,9 @@
 //! - [`SdfCollider`]: P3's signed distance field on a regular grid (trilinear), rebuilt from the
 //!   deformed body at every update (narrow band plus flood fill).
 //! - [`DepthMapCollider`]: P4's six orthographic depth and normal maps of the body, on the CPU.
-//! - [`ExactCollider`]: closest point on the whole triangle mesh (a parry3d-f64 BVH built once and
-//!   refitted to each shape, with pseudo-normal inside tests): the referee that measures every
-//!   other collider.
+//! - [`ExactCollider`]: closest point on the whole triangle mesh (a [`facetree::FaceTree`] built
+//!   once and refitted to each shape, with pseudo-normal inside tests): the referee that measures
+//!   every other collider.
 //! - [`BodyFollower`]: P1.3.4, points keep their coordinates relative to their nearest body face when
 //!   the body moves; as the frame loop's `Follower` it first carries the whole cloth with the root.
 //! - [`Bands`]: garment vertices bound to the body's surface (waistbands, collars, cuffs).
@@ -25,6 +25,7 @@ pub mod ccd;
 pub mod crossings;
 pub mod depth;
 pub mod exact;
+pub mod facetree;
 pub mod follow;
 pub mod grid;
 pub mod hold;

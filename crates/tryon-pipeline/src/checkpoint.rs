@@ -8,7 +8,7 @@
 //! preview's frame, how far the streamed files had got). It also names how the run was made (the
 //! caller's `invocation`, e.g. the command line) and a fingerprint of the scene as built, so a
 //! run resumes only onto the scene it was made from. The file is written atomically:
-//! `TRYONCK5`, a postcard body, and an FNV-1a check sum of the body.
+//! `TRYONCK6`, a postcard body, and an FNV-1a check sum of the body.
 
 use crate::pipeline::Pipeline;
 use crate::run::RunState;
@@ -25,7 +25,7 @@ use tryon_core::state::{StateError, decode, encode, fnv1a};
 pub const FILE: &str = "checkpoint.tryon";
 /// Raised whenever the layout of what a checkpoint holds changes (postcard is not self-describing,
 /// so an older layout could otherwise be read as the new one): 5 since VBD lost its coarse pokes.
-const MAGIC: &[u8; 8] = b"TRYONCK5";
+const MAGIC: &[u8; 8] = b"TRYONCK6";
 
 /// Why a run could not go on from its checkpoint.
 #[derive(Debug, Error)]
