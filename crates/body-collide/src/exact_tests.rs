@@ -326,3 +326,45 @@ fn the_exact_collider_finds_a_body_vertex_poking_through_a_cloth_triangle() {
     // Nothing else of the ball is within 1 mm under the triangle or through it.
     assert_eq!(pokes.len(), 1, "{pokes:?}");
 }
+
+/// Probes within a reach, asked again after the points moved a little on the same shape (what
+/// the cloth solver does between its probes and its fail-safe): a point the whole search puts
+/// nearer than the reach gets the whole search's distance, any other a distance of at least the
+/// reach; nothing inside is reported outside, however it was answered (from what was found
+/// before, by a search cut off at the reach, or in full).
+#[test]
+fn probes_within_a_reach_agree_with_the_whole_search_after_small_moves() {
+    let mesh = bumpy(3, 0.15, 5.0);
+    let mut c = ExactCollider::new(&mesh, 0.002).unwrap();
+    let reach = 0.03;
+    let mut s = 0x2545_f491_4f6c_dd1d_u64;
+    let mut rand = || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s >> 11) as Real / (1u64 << 53) as Real * 2.0 - 1.0
+    };
+    let mut points: Vec<Vec3> = (0..400)
+        .map(|_| {
+            let dir = Vec3::new(rand(), rand(), rand()).normalize();
+            dir * (0.3 + 0.2 * (rand() + 1.0) / 2.0)
+        })
+        .collect();
+    let all: Vec<u32> = (0..points.len() as u32).collect();
+    let mut out = Vec::new();
+    for round in 0..6 {
+        c.probe_near(&points, &all, reach, &mut out);
+        for (k, p) in points.iter().enumerate() {
+            let whole = c.project(p).unwrap().distance;
+            let got = out[k].distance;
+            if whole < reach {
+                assert_eq!(got.to_bits(), whole.to_bits(), "round {round}, point {k}");
+            } else {
+                assert!(got >= reach, "round {round}, point {k}: {got} for {whole}");
+            }
+        }
+        for p in &mut points {
+            *p += Vec3::new(rand(), rand(), rand()) * 0.003;
+        }
+    }
+}

@@ -43,18 +43,30 @@ impl Memo {
         }
     }
 
-    /// The answer kept for point `k` at `p` on `shape`, if it answers a query with `cutoff`.
+    /// The answer kept for point `k` at `p` on `shape`, if it answers a query with `cutoff`:
+    /// asked again where it was, what was found there; moved on the same shape, a point that was
+    /// outside with no surface within some distance is still outside with none within that
+    /// distance less its move (the distance to a still surface changes no faster than the point
+    /// moves), which answers a query whose cutoff is no farther.
     fn reuse(&self, k: usize, p: &Vec3, shape: u64, cutoff: Real) -> Option<Near> {
-        let same =
-            self.shape[k] == shape && (0..3).all(|a| p[a].to_bits() == self.at[k][a].to_bits());
-        if !same {
+        if self.shape[k] != shape {
             return None;
         }
-        match (self.clear[k], self.found[k]) {
-            (c, _) if c > 0.0 => (c >= cutoff).then_some(Near::Beyond(c)),
-            (_, Some(pr)) => Some(Near::Found(pr)),
-            (_, None) => Some(Near::Invalid),
+        let same = (0..3).all(|a| p[a].to_bits() == self.at[k][a].to_bits());
+        if same {
+            return match (self.clear[k], self.found[k]) {
+                (c, _) if c > 0.0 => (c >= cutoff).then_some(Near::Beyond(c)),
+                (_, Some(pr)) => Some(Near::Found(pr)),
+                (_, None) => Some(Near::Invalid),
+            };
         }
+        let clear = match (self.clear[k], self.found[k]) {
+            (c, _) if c > 0.0 => c,
+            (_, Some(pr)) if pr.distance > 0.0 => pr.distance,
+            _ => return None,
+        };
+        let clear = clear - (p - self.at[k]).norm();
+        (clear >= cutoff && clear.is_finite()).then_some(Near::Beyond(clear))
     }
 
     fn keep(&mut self, k: usize, p: Vec3, shape: u64, near: Near) {
