@@ -88,6 +88,9 @@ struct Grid {
     items: Vec<u32>,
     /// A bit per part present in the cell.
     mask: Vec<u32>,
+    /// The items' positions and parts in the items' order (a cell's are contiguous).
+    xs: Vec<Vec3>,
+    parts: Vec<u8>,
 }
 
 /// Most cells a grid may have; a body spread wider gets coarser cells.
@@ -121,6 +124,8 @@ impl Grid {
             start: vec![0; (dims[0] * dims[1] * dims[2]) as usize + 1],
             items: Vec::new(),
             mask: vec![0; (dims[0] * dims[1] * dims[2]) as usize],
+            xs: Vec::new(),
+            parts: Vec::new(),
         };
         let at: Vec<Option<usize>> = x
             .iter()
@@ -143,6 +148,8 @@ impl Grid {
                 fill[c] += 1;
             }
         }
+        g.xs = g.items.iter().map(|&v| x[v as usize]).collect();
+        g.parts = g.items.iter().map(|&v| parts[v as usize]).collect();
         Some(g)
     }
 
@@ -164,19 +171,29 @@ impl Grid {
     }
 
     /// Per cell, the parts present in it and the 26 around it: the masks OR-ed along x, then y,
-    /// then z (the same as over the 27 cells, in 9 reads per cell instead of 27).
+    /// then z (the same as over the 27 cells, in 9 reads per cell instead of 27), row by row
+    /// with no division per cell.
     fn masks_around(&self) -> Vec<u32> {
         let [nx, ny, nz] = self.dims.map(|d| d as usize);
         let mut m = self.mask.clone();
+        let mut src = vec![0; m.len()];
         for (stride, len) in [(1, nx), (nx, ny), (nx * ny, nz)] {
-            let src = m.clone();
-            for (c, out) in m.iter_mut().enumerate() {
-                let i = (c / stride) % len;
-                if i > 0 {
-                    *out |= src[c - stride];
-                }
-                if i + 1 < len {
-                    *out |= src[c + stride];
+            src.copy_from_slice(&m);
+            // Cells are runs of `len` along this axis, `stride` apart: run starts are the cells
+            // whose index along the axis is 0.
+            let block = stride * len;
+            for base in (0..m.len()).step_by(block) {
+                for off in 0..stride {
+                    let first = base + off;
+                    for i in 0..len {
+                        let c = first + i * stride;
+                        if i > 0 {
+                            m[c] |= src[c - stride];
+                        }
+                        if i + 1 < len {
+                            m[c] |= src[c + stride];
+                        }
+                    }
                 }
             }
         }
@@ -206,10 +223,11 @@ impl Press {
             .collect();
         // Each candidate judged on its own, in parallel, the moves collected in order.
         let x: &[Vec3] = positions;
+        let ns: Vec<Vec3> = grid.items.iter().map(|&v| normals[v as usize]).collect();
         let moves: Vec<(usize, Vec3, Real)> = candidates
             .par_iter()
             .with_min_len(64)
-            .filter_map(|&v| self.overlap(v, x, &normals, &grid))
+            .filter_map(|&v| self.overlap(v, x, (&normals, &ns), &grid))
             .collect();
         let mut out = Pressed::default();
         for (v, n, depth) in moves {
@@ -221,36 +239,37 @@ impl Press {
     }
 
     /// The facing part's normal and how far `v` lies behind its surface (negative down to `-gap`:
-    /// in front, but nearer than the gap).
+    /// in front, but nearer than the gap). `normals` per vertex, and in the grid's item order.
     fn overlap(
         &self,
         v: usize,
         x: &[Vec3],
-        normals: &[Vec3],
+        (normals, sorted): (&[Vec3], &[Vec3]),
         grid: &Grid,
     ) -> Option<(usize, Vec3, Real)> {
-        let (p, part) = (x[v], self.parts[v]);
-        let mut best: Option<(Real, usize)> = None;
+        let (p, part, nv) = (x[v], self.parts[v], normals[v]);
+        let mut best: Option<(Real, u32, usize)> = None;
         let others = !(1u32 << (part % 32));
         for c in grid.around(grid.coords(&p)) {
             if grid.mask[c] & others == 0 {
                 continue; // only this vertex's own part here
             }
-            for &u in grid.items(c) {
-                let u = u as usize;
-                let d = (x[u] - p).norm_squared();
-                if self.parts[u] != part
+            // The cell's items are contiguous in the grid's sorted copies.
+            for k in grid.start[c] as usize..grid.start[c + 1] as usize {
+                let d = (grid.xs[k] - p).norm_squared();
+                let u = grid.items[k];
+                if grid.parts[k] != part
                     && d <= REACH * REACH
-                    && normals[u].dot(&normals[v]) < FACING
-                    && best.is_none_or(|(b, w)| d < b || (d == b && u < w))
+                    && sorted[k].dot(&nv) < FACING
+                    && best.is_none_or(|(b, w, _)| d < b || (d == b && u < w))
                 {
-                    best = Some((d, u));
+                    best = Some((d, u, k));
                 }
             }
         }
-        let (_, u) = best?;
-        let height = (p - x[u]).dot(&normals[u]);
-        (height < self.gap && height > -DEEPEST).then_some((v, normals[u], -height))
+        let (_, u, k) = best?;
+        let height = (p - x[u as usize]).dot(&sorted[k]);
+        (height < self.gap && height > -DEEPEST).then_some((v, sorted[k], -height))
     }
 }
 
