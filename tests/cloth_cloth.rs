@@ -11,6 +11,7 @@ fn drape(n: u32, self_collision: bool) -> tryon_pipeline::RunOutput {
         "cloth.solver=\"vbd\"".to_string(),
         format!("garment.particles={n}"),
         format!("effects.self_collision={self_collision}"),
+        "output.referee_share=1".to_string(),
     ]
     .into();
     let scene = Scene::load_with_overrides(&file, &sets).unwrap_or_else(|e| panic!("{e}"));
@@ -66,6 +67,7 @@ fn layered_run(cloth_collision: bool, seconds: f64) -> tryon_pipeline::RunOutput
         format!("scene.duration={seconds}"),
         format!("effects.cloth_collision={cloth_collision}"),
         format!("effects.self_collision={cloth_collision}"),
+        "output.referee_share=1".to_string(),
     ]
     .into();
     let scene = Scene::load_with_overrides(&file, &sets).unwrap_or_else(|e| panic!("{e}"));

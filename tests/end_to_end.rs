@@ -44,7 +44,10 @@ pub fn khronos_errors(glb: &Path) -> String {
 
 #[test]
 fn demo_runs_a_few_frames_stays_close_and_writes_outputs_that_read_back() {
-    let mut p = Pipeline::new(Scene::demo()).unwrap();
+    // Every frame judged, so the streamed run's figures compare with this one's.
+    let mut demo = Scene::demo();
+    demo.output.referee_share = 1.0;
+    let mut p = Pipeline::new(demo.clone()).unwrap();
     assert!((300..=400).contains(&p.garment.positions.len()));
     let run = p.run(Some(10), |_, _| {});
     assert_eq!(run.frames.len(), 11);
@@ -141,7 +144,7 @@ fn demo_runs_a_few_frames_stays_close_and_writes_outputs_that_read_back() {
 
     // Streamed while running (what `tryon run` does): the same files, and nothing else left.
     let streamed = scratch_dir("demo-streamed");
-    let mut q = Pipeline::new(Scene::demo()).unwrap();
+    let mut q = Pipeline::new(demo).unwrap();
     let (stats, files) = q.run_to(&streamed, Some(10), |_, _| {}).unwrap();
     assert_eq!(stats.metrics, run.stats.metrics);
     // The same five files (view.bin streamed also holds the coarse cloth under the fine surface,
@@ -252,7 +255,7 @@ fn shipped_scenes_check_and_the_demo_is_the_shipped_file() {
 /// A sheet falling in free air, far from the sphere: friction can never act.
 fn falling_sheet(effects: &str) -> Scene {
     let text = format!(
-        "[scene]\nfps = 60\nduration = 0.2\nsettle = 0\n[body]\nkind = \"sphere\"\n[garment]\nkind = \"square\"\nparticles = 8\ndrop_height = 3.0\n[motion]\nkind = \"still\"\n[effects]\nfollow_body = false\nrefine = 0\n{effects}"
+        "[scene]\nfps = 60\nduration = 0.2\nsettle = 0\n[output]\nreferee_share = 1.0\n[body]\nkind = \"sphere\"\n[garment]\nkind = \"square\"\nparticles = 8\ndrop_height = 3.0\n[motion]\nkind = \"still\"\n[effects]\nfollow_body = false\nrefine = 0\n{effects}"
     );
     Scene::parse(&text, Path::new("sheet.toml")).unwrap()
 }
@@ -463,6 +466,37 @@ fn the_referee_judges_every_nth_frame_or_none_and_says_how_many() {
     assert_eq!(judged(5).1, vec![5, 10]);
     let (n, frames, mean) = judged(0);
     assert_eq!((n, frames.len(), mean), (0, 0, 0.0));
+}
+
+/// A referee held to a share of the run's time judges fewer frames, and each frame it judges gets
+/// the figures it gets when every frame is judged; the stretch percentile is over what it judged.
+#[test]
+fn a_referee_held_to_a_share_of_the_time_skips_frames_but_not_figures() {
+    let run = |share: f64| {
+        let mut s = Scene::demo();
+        s.output.referee_share = share;
+        Pipeline::new(s).unwrap().run(Some(12), |_, _| {}).stats
+    };
+    let (all, few) = (run(1.0), run(0.01));
+    assert_eq!(all.metrics.judged_frames, 12);
+    assert!(
+        (1..12).contains(&few.metrics.judged_frames),
+        "judged {} of 12",
+        few.metrics.judged_frames
+    );
+    assert_eq!(
+        few.per_frame[0].frame, all.per_frame[0].frame,
+        "the first is always judged"
+    );
+    for f in &few.per_frame {
+        let same = all.per_frame.iter().find(|g| g.frame == f.frame).unwrap();
+        assert_eq!(f, same, "frame {}", f.frame);
+    }
+    let m = &all.metrics;
+    assert!(
+        m.p99_stretch > 1.0 && m.p99_stretch <= m.max_stretch,
+        "{m:?}"
+    );
 }
 
 /// stats.json says what the body press did: on the demo (the mannequin's arms swing against its

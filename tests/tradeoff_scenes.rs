@@ -11,7 +11,10 @@ pub(crate) fn scene(file: &str, sets: &[&str]) -> Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../data/scenes")
         .join(file);
-    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    // Every frame judged, so two runs' figures compare.
+    let sets: Vec<String> = (sets.iter().map(|s| s.to_string()))
+        .chain(["output.referee_share=1".to_string()])
+        .collect();
     Scene::load_with_overrides(&path, &sets).unwrap_or_else(|e| panic!("{e}"))
 }
 

@@ -17,6 +17,7 @@ pub mod drape;
 pub mod export;
 pub mod folding;
 mod garments;
+mod judge;
 pub mod kimono;
 pub mod kimono_wear;
 pub mod live;

@@ -2,7 +2,7 @@
 //! every stage timed; the result holds every frame's garment and pose for the exporters, and the
 //! statistics written to stats.json.
 
-use crate::metrics::{Baseline, penetration_of, stretch};
+use crate::metrics::{Baseline, StretchCounts};
 use crate::pipeline::{LoopState, Pipeline, run_surface};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
@@ -128,6 +128,8 @@ pub struct RunState {
     pub sums: [Real; 2],
     /// Sums of the length restoration figures.
     pub length: crate::stats::LengthSums,
+    /// Every judged frame's edge stretches, counted (`p99_stretch`).
+    pub stretches: StretchCounts,
     /// Kept in a self-describing form: stats.json leaves out empty fields, which a compact
     /// binary form cannot.
     #[serde(with = "crate::stats::self_described")]
@@ -157,8 +159,8 @@ pub struct RunContext {
     pub body_triangles: Vec<[u32; 3]>,
     /// The coarse cloth's triangles under a refined output (empty without refinement).
     pub coarse_triangles: Vec<[u32; 3]>,
-    fold_triangles: Vec<[u32; 3]>,
-    start_distances: Baseline,
+    pub(crate) fold_triangles: Vec<[u32; 3]>,
+    pub(crate) start_distances: Baseline,
     pub(crate) refines: bool,
     pipelined: bool,
 }
@@ -280,6 +282,7 @@ impl Pipeline {
             total: StepReport::default(),
             sums: [0.0; 2],
             length: Default::default(),
+            stretches: StretchCounts::default(),
             stats,
             timers: Vec::new(),
             pending: None,
@@ -362,7 +365,7 @@ impl Pipeline {
                 )
             };
             state.total.accumulate(&report);
-            if ctx.every > 0 && k % ctx.every == 0 {
+            if ctx.every > 0 && k % ctx.every == 0 && self.referee_may(&state, &timers) {
                 self.judge(
                     &ctx,
                     &mut state,
@@ -404,82 +407,13 @@ impl Pipeline {
         self.conclude(&ctx, state, timers)
     }
 
-    /// Judges output frame `k` with the exact referee into `state`'s statistics.
-    fn judge(
-        &mut self,
-        ctx: &RunContext,
-        state: &mut RunState,
-        (k, report, coarse_x, body_frame): (usize, &StepReport, &[Vec3], &BodyFrame),
-        timers: &mut Timers,
-    ) {
-        let stats = &mut state.stats;
-        stats.metrics.judged_frames += 1;
-        if let Some(j) = timers.time("referee", || {
-            self.surface_stages
-                .iter()
-                .find_map(|s| s.length_error(&self.surface))
-        }) {
-            state.length.add(&j);
-        }
-        let output = if ctx.refines {
-            &self.surface.positions
-        } else {
-            coarse_x
-        };
-        let referee = &mut self.referee;
-        let depth = &mut state.depth;
-        let (pen, (smin, smax, smean), cloth) = timers.time("referee", || {
-            if ctx.moving {
-                tryon_core::stages::Collider::update(referee, body_frame);
-            }
-            let signed = crate::metrics::distances(referee, output);
-            depth.clear();
-            depth.extend(signed.iter().map(|d| tryon_io::depth_code(-d)));
-            (
-                penetration_of(&signed, &ctx.start_distances),
-                stretch(&ctx.info.edges, &ctx.info.rest, coarse_x),
-                body_collide::crossings::judge(output, &ctx.garment_triangles),
-            )
-        });
-        let m = &mut stats.metrics;
-        m.max_penetration_m = m.max_penetration_m.max(pen.max);
-        m.p99_penetration_m = m.p99_penetration_m.max(pen.p99);
-        m.max_stretch = m.max_stretch.max(smax);
-        m.min_stretch = if m.judged_frames == 1 {
-            smin
-        } else {
-            m.min_stretch.min(smin)
-        };
-        m.detached_share = m.detached_share.max(pen.detached_share);
-        m.cloth_intersections = m.cloth_intersections.max(cloth.crossings);
-        m.cloth_min_gap_m = if m.judged_frames == 1 {
-            cloth.min_gap
-        } else {
-            m.cloth_min_gap_m.min(cloth.min_gap)
-        };
-        state.sums[0] += smean;
-        state.sums[1] += pen.share_over_1mm;
-        stats.per_frame.push(FrameStats {
-            frame: k,
-            max_penetration_m: pen.max,
-            p99_penetration_m: pen.p99,
-            max_stretch: smax,
-            detached_share: pen.detached_share,
-            cloth_intersections: cloth.crossings,
-            contacts: report.contacts,
-            retries: report.retries,
-            body_parts: report.body_parts,
-            fold_retention: (self.folds).retention(&self.cloth.positions, &ctx.fold_triangles),
-        });
-        stats.frame_ms.push(timers.open());
-    }
-
     /// The run's statistics once the last frame is made.
     fn conclude(&mut self, ctx: &RunContext, state: RunState, timers: Timers) -> RunSummary {
         let mut stats = state.stats;
         stats.loop_s = state.loop_s;
         let judged = stats.metrics.judged_frames.max(1) as Real;
         stats.metrics.mean_stretch = state.sums[0] / judged;
+        stats.metrics.p99_stretch = state.stretches.quantile(0.99);
         stats.metrics.share_over_1mm = state.sums[1] / judged;
         let total = state.total;
         stats.metrics.non_finite_events = total.non_finite_events;

@@ -33,6 +33,10 @@ pub struct Metrics {
     pub max_stretch: Real,
     /// Smallest structural edge length / rest length over all frames.
     pub min_stretch: Real,
+    /// The 99th percentile of structural edge length / rest length over every edge of every
+    /// judged frame (to 1e-4).
+    #[serde(default)]
+    pub p99_stretch: Real,
     /// Largest share, over frames, of garment vertices detached from the body (torn, slid or
     /// fallen off; `body_collide::hold`): 0 while the garment stays on.
     pub detached_share: Real,

@@ -393,9 +393,16 @@ pub struct OutputSection {
     pub preview_height: u32,
     /// Judge every n-th frame with the exact referee (penetration, detachment, stretch, length
     /// error); 0 = never (the metrics then read 0 and `metrics.judged_frames` says so). The
-    /// referee is measurement, not product: on the demo it is most of the wall time.
+    /// referee is measurement, not product: `referee_share` bounds what it costs.
     #[schemars(range(max = 100000))]
     pub referee_every: usize,
+    /// Most of the run's stage time the referee may take: a frame due for judging is skipped
+    /// while the referee's time so far is over this share of all stage time (the first is always
+    /// judged; the frames it judges get the same figures). Below 1, which frames are judged
+    /// depends on the machine's speed, so frames.jsonl and view.bin differ between runs and a
+    /// resumed run's from an uninterrupted one's; 1 (the default) judges every due frame.
+    #[schemars(range(min = 0.01, max = 1.0))]
+    pub referee_share: Real,
     /// garment.pc2: the garment's frames as a PC2 point cache (Blender's Mesh Cache modifier,
     /// 3ds Max, Maya), to play on garment-obj/garment_00000.obj or the GLB's garment.
     pub pc2: bool,
@@ -434,6 +441,7 @@ impl Default for OutputSection {
             preview_width: 800,
             preview_height: 1000,
             referee_every: 1,
+            referee_share: 1.0,
             pc2: false,
             obj_sequence: false,
             gif: false,

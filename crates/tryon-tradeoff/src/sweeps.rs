@@ -41,7 +41,10 @@ fn run_scene(
     frames: Option<usize>,
 ) -> Result<(Stats, Pipeline), String> {
     let path = scenes_dir().join(file);
-    let scene = Scene::load_with_overrides(&path, sets).map_err(|e| e.to_string())?;
+    // Every variant judged on every frame, so their figures compare.
+    let mut sets = sets.to_vec();
+    sets.push("output.referee_share=1".into());
+    let scene = Scene::load_with_overrides(&path, &sets).map_err(|e| e.to_string())?;
     let mut p = Pipeline::new(scene).map_err(|e| format!("{}: {e}", path.display()))?;
     let out = p.run(frames, |_, _| {});
     Ok((out.stats, p))
