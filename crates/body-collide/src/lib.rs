@@ -34,6 +34,7 @@ pub mod sdf;
 pub mod sdf_band;
 pub mod swept;
 pub mod tracker;
+mod tritri;
 
 pub use bands::Bands;
 pub use body::{BodyError, BodyMesh};
