@@ -121,9 +121,11 @@ fn resumes_to_the_same_bytes(tag: &str, scene: Scene, frames: usize, every: usiz
         "{tag}"
     );
     let jsonl = std::fs::read_to_string(cut.join("frames.jsonl")).unwrap();
+    let judged = stats_without_times(&whole)["metrics"]["judged_frames"].as_u64();
+    assert!(judged.is_some_and(|j| j >= 1), "{tag}: {judged:?}");
     assert_eq!(
-        jsonl.lines().count(),
-        frames,
+        Some(jsonl.lines().count() as u64),
+        judged,
         "{tag}: one line a judged frame"
     );
     let mut leftovers: Vec<_> = std::fs::read_dir(&cut)

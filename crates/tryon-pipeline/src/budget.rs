@@ -170,6 +170,45 @@ pub fn estimate(
     }
 }
 
+/// Microseconds a frame's stages take and one judged frame of the referee takes, from the run's
+/// counts: `output_vertices` (the refined surface, or the cloth), `body` (vertices, triangles).
+/// A fit on this project's release build, one thread of a 2-core machine, over the shipped scenes
+/// (docs/decisions, *referee stride*): low for the frame (the solver's sweeps, the surface, the
+/// skinning) and high for the referee (an exact body query and a crossing test per output vertex),
+/// so that the share it sets is rather undershot than passed.
+pub fn frame_and_referee_us(
+    e: &Estimate,
+    output_vertices: usize,
+    body: (usize, usize),
+) -> (Real, Real) {
+    let per_sweep = match e.solver {
+        SolverName::Vbd => 0.25,
+        SolverName::Xpbd => 0.2,
+        SolverName::P1 => 0.5,
+    };
+    let sweeps = (e.particles * e.substeps * e.iterations) as Real;
+    let frame = per_sweep * sweeps + 0.5 * e.fine_vertices as Real + 0.05 * body.0 as Real;
+    let referee = 5.0 * output_vertices as Real + 0.05 * body.1 as Real;
+    (frame, referee)
+}
+
+/// Every how many frames the referee judges so that it takes about `share` of a run's time (1:
+/// every frame), from [`frame_and_referee_us`]: judged one frame in `n`, it takes
+/// `r / n / (f + r / n)` of the time, at most `share` when `n >= r (1 - share) / (share f)`.
+pub fn referee_stride(
+    e: &Estimate,
+    output_vertices: usize,
+    body: (usize, usize),
+    share: Real,
+) -> usize {
+    if !(share < 1.0) {
+        return 1;
+    }
+    let (f, r) = frame_and_referee_us(e, output_vertices, body);
+    let n = r * (1.0 - share) / (share.max(1e-3) * f.max(1.0));
+    (n.ceil() as usize).clamp(1, 1000)
+}
+
 /// Fine vertices of `coarse` refined at `level` (as `pnt_surface::PnRefiner` builds them).
 pub fn fine_vertex_count(coarse: &PolyMesh, level: u8) -> usize {
     let (tris, _) = coarse.triangulate();
@@ -261,6 +300,32 @@ pub fn check(e: &Estimate, limits: &Limits) -> Result<(), BudgetError> {
 mod tests {
     use super::*;
     use tryon_core::mesh::grid_xz;
+
+    #[test]
+    fn the_referee_stride_grows_with_what_judging_costs_against_a_frame() {
+        let e = Estimate {
+            particles: 2000,
+            substeps: 4,
+            iterations: 10,
+            fine_vertices: 8000,
+            solver: SolverName::Vbd,
+            ..Estimate::default()
+        };
+        let body = (13000, 26000);
+        // A frame of about 20 + 4 + 0.65 ms against a referee of about 40 + 1.3 ms: at a quarter,
+        // one frame in ceil(3 x 41.3 / 24.65) = 6.
+        assert_eq!(referee_stride(&e, 8000, body, 0.25), 6);
+        assert_eq!(referee_stride(&e, 8000, body, 1.0), 1);
+        // The same cloth unrefined: a frame of 20.65 ms against 10 + 1.3 ms judged, one in
+        // ceil(3 x 11.3 / 20.65) = 2.
+        let coarse = Estimate {
+            fine_vertices: 0,
+            ..e
+        };
+        assert_eq!(referee_stride(&coarse, 2000, body, 0.25), 2);
+        // Nothing to judge against nothing to do stays finite.
+        assert_eq!(referee_stride(&Estimate::default(), 0, (0, 0), 0.25), 1);
+    }
 
     #[test]
     fn the_fine_vertex_count_is_the_refiners() {

@@ -1,4 +1,4 @@
-//! The referee's part of the frame loop: whether a due frame is judged, and judging it.
+//! The referee's part of the frame loop: judging a due frame.
 
 use crate::metrics::{penetration_of, stretch_counted};
 use crate::pipeline::Pipeline;
@@ -9,17 +9,6 @@ use tryon_core::frames::{BodyFrame, StepReport};
 use tryon_core::math::Vec3;
 
 impl Pipeline {
-    /// Whether the referee may judge the next due frame: the first always, then while its time so
-    /// far is within `[output] referee_share` of all stage time.
-    pub(crate) fn referee_may(&self, state: &RunState, timers: &Timers) -> bool {
-        let share = self.scene.output.referee_share;
-        if state.stats.metrics.judged_frames == 0 || share >= 1.0 {
-            return true;
-        }
-        let (referee, rest) = timers.share_of("referee");
-        referee <= share / (1.0 - share) * rest
-    }
-
     /// Judges output frame `k` with the exact referee into `state`'s statistics.
     pub(crate) fn judge(
         &mut self,

@@ -152,7 +152,11 @@ pub struct RunContext {
     pub frames: usize,
     pub(crate) info: tryon_core::stages::ClothInfo,
     pub(crate) moving: bool,
+    /// The referee judges every this many frames (`referee_every` times the stride that holds it
+    /// to `referee_share`; 0: never) ...
     every: usize,
+    /// ... and the last frame too, when the stride skips frames (so a short run is judged).
+    last_judged: bool,
     pub garment_triangles: Vec<[u32; 3]>,
     pub garment_names: Vec<String>,
     pub triangle_garment: Vec<u16>,
@@ -208,6 +212,15 @@ impl Pipeline {
         }
         let every = self.scene.output.referee_every;
         let garment_triangles = self.output_triangles();
+        let stride = crate::budget::referee_stride(
+            &self.estimate,
+            match self.surface_stages.is_empty() {
+                true => self.cloth.positions.len(),
+                false => self.surface.positions.len(),
+            },
+            (self.body_mesh.positions.len(), self.body_mesh.faces.len()),
+            self.scene.output.referee_share,
+        );
         // The folds are measured on the coarse cloth.
         let fold_triangles = match self.folds.folds.is_empty() {
             true => Vec::new(),
@@ -250,6 +263,7 @@ impl Pipeline {
             ..Stats::default()
         };
         stats.metrics.placement_moved = self.placed_moved;
+        stats.metrics.judged_every = every * stride;
         stats.warnings.clone_from(&self.warnings);
         stats.metrics.garments = self.wear.len().max(1);
         stats.metrics.layer_placement_moved = self.layered.iter().map(|l| l.moved).sum();
@@ -262,7 +276,8 @@ impl Pipeline {
             frames,
             info,
             moving,
-            every,
+            every: every * stride,
+            last_judged: stride > 1,
             garment_triangles,
             garment_names,
             triangle_garment,
@@ -365,7 +380,8 @@ impl Pipeline {
                 )
             };
             state.total.accumulate(&report);
-            if ctx.every > 0 && k % ctx.every == 0 && self.referee_may(&state, &timers) {
+            let due = k % ctx.every.max(1) == 0 || (ctx.last_judged && k == frames);
+            if ctx.every > 0 && due {
                 self.judge(
                     &ctx,
                     &mut state,

@@ -72,6 +72,10 @@ pub struct Metrics {
     pub placement_moved: usize,
     /// Frames the referee judged (`[output] referee_every`); the figures above are over these.
     pub judged_frames: usize,
+    /// The referee judged every this many frames (and the last): `referee_every` times the stride
+    /// estimated to hold it to `referee_share` of the run's time.
+    #[serde(default)]
+    pub judged_every: usize,
     /// Most pairs of output garment triangles (sharing no vertex) that cross each other in one
     /// frame (`crossings.rs`).
     pub cloth_intersections: usize,

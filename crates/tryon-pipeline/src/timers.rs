@@ -41,20 +41,6 @@ impl Timers {
         }
     }
 
-    /// Stage `name`'s time so far and every other stage's (ms), closed frames and the open one.
-    pub fn share_of(&self, name: &str) -> (Real, Real) {
-        let (mut this, mut rest) = (0.0, 0.0);
-        let closed = self.totals.iter().map(|(n, t)| (*n, t.sum));
-        for (n, ms) in closed.chain(self.frame.iter().map(|(n, ms)| (*n, *ms))) {
-            if n == name {
-                this += ms;
-            } else {
-                rest += ms;
-            }
-        }
-        (this, rest)
-    }
-
     /// The open frame's time so far per stage (ms, to the microsecond).
     pub fn open(&self) -> BTreeMap<String, Real> {
         (self.frame.iter())

@@ -396,11 +396,11 @@ pub struct OutputSection {
     /// referee is measurement, not product: `referee_share` bounds what it costs.
     #[schemars(range(max = 100000))]
     pub referee_every: usize,
-    /// Most of the run's stage time the referee may take: a frame due for judging is skipped
-    /// while the referee's time so far is over this share of all stage time (the first is always
-    /// judged; the frames it judges get the same figures). Below 1, which frames are judged
-    /// depends on the machine's speed, so frames.jsonl and view.bin differ between runs and a
-    /// resumed run's from an uninterrupted one's; 1 (the default) judges every due frame.
+    /// About the most of a run's time the referee may take: it judges only every n-th due frame
+    /// (and the last), n estimated before the run from the scene's counts (what an exact body
+    /// query and a crossing test per output vertex cost against the solver's sweeps and the
+    /// surface), so which frames are judged is the same on every machine and in a resumed run
+    /// (`metrics.judged_every` says which). 1 judges every due frame.
     #[schemars(range(min = 0.01, max = 1.0))]
     pub referee_share: Real,
     /// garment.pc2: the garment's frames as a PC2 point cache (Blender's Mesh Cache modifier,
@@ -441,7 +441,7 @@ impl Default for OutputSection {
             preview_width: 800,
             preview_height: 1000,
             referee_every: 1,
-            referee_share: 1.0,
+            referee_share: 0.25,
             pc2: false,
             obj_sequence: false,
             gif: false,
