@@ -370,11 +370,12 @@ impl VbdSim {
             o[4],
             o[5] + iso,
         );
-        for pl in [self.planes[i], self.opposite[i], self.held[i]]
+        // By reference: copying the three planes cost a memmove call a vertex.
+        for pl in [&self.planes[i], &self.opposite[i], &self.held[i]]
             .into_iter()
             .flatten()
         {
-            self.contact(&pl, i, xi, h, &mut f, &mut hess);
+            self.contact(pl, i, xi, h, &mut f, &mut hess);
         }
         if let Some(sc) = &self.layers {
             let kc = (self.penalty(i), self.vbd.stick_speed * h);
