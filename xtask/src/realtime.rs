@@ -124,6 +124,10 @@ fn table(now: &Value, previous: Option<&Value>) -> String {
         );
     }
     if let Some(p) = previous {
+        if p["machine"] != now["machine"] {
+            s += "\nThe previous run was on another machine: the ratios compare the machines as well \
+                  as the code.\n";
+        }
         s += &format!(
             "\nThe previous run, {} on {}:\n\n| scene | frame ms | cloth ms |\n|---|---|---|\n",
             p["date"].as_str().unwrap_or("?"),
@@ -179,5 +183,8 @@ mod tests {
         assert!(t.contains("| b | 10 | 5.00 | 200.0 | - |"), "{t}");
         assert!(t.contains("| a | 20.00 | 10.00 |"), "{t}");
         assert!(t.starts_with(BEGIN) && t.ends_with(END));
+        assert!(!t.contains("another machine"), "{t}");
+        let elsewhere = serde_json::json!({"date": "d0", "machine": "m2", "scenes": {}});
+        assert!(table(&new, Some(&elsewhere)).contains("another machine"));
     }
 }
