@@ -6,14 +6,13 @@
 //! is reused. The cases: `probe_near` within the VBD solver's reach (thickness + 3 cm), the whole
 //! search (`probe`), and the fail-safe (`resolve`, within the thickness).
 
+mod dressed;
+
 use body_collide::{ExactCollider, NearestVertexCollider};
 use criterion::{Criterion, criterion_group, criterion_main};
-use std::path::Path;
 use std::time::Duration;
 use tryon_core::math::{Real, Vec3};
 use tryon_core::stages::{Collider, Probe};
-use tryon_pipeline::run::Timers;
-use tryon_pipeline::{Pipeline, Scene};
 
 /// Frames run before the body and the cloth are taken.
 const WARM: usize = 30;
@@ -26,22 +25,7 @@ fn dressed() -> Option<(
     tryon_core::frames::BodyFrame,
     Vec<Vec3>,
 )> {
-    let path =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/scenes/makehuman-dress-walk.toml");
-    let scene = Scene::load_with_overrides(&path, &[])
-        .map_err(|e| eprintln!("collider: skipped: {e}"))
-        .ok()?;
-    let mut p = Pipeline::new(scene).ok()?;
-    let mut st = p.start();
-    let mut timers = Timers::default();
-    let warm = if cfg!(debug_assertions) || std::env::args().any(|a| a == "--test") {
-        2
-    } else {
-        WARM
-    };
-    for k in 1..warm {
-        p.advance(&mut st, p.frame_time(k), &mut timers);
-    }
+    let (p, st) = dressed::dressed("collider", WARM)?;
     Some((
         p.body_mesh.clone(),
         st.body_frame.clone(),

@@ -4,38 +4,20 @@
 //! (`crossings::judge`), the crossing pairs alone, and the exact signed distance of every output
 //! vertex to the body (`metrics::distances`, the referee collider as the run keeps it).
 
+mod dressed;
+
 use body_collide::{ExactCollider, crossings, metrics};
 use criterion::{Criterion, criterion_group, criterion_main};
-use std::path::Path;
 use std::time::Duration;
 use tryon_core::stages::Collider;
-use tryon_pipeline::run::Timers;
-use tryon_pipeline::{Pipeline, Scene};
 
 /// Frames run before the surface is taken.
 const WARM: usize = 30;
 
 fn bench(c: &mut Criterion) {
-    let path =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/scenes/makehuman-dress-walk.toml");
-    let Ok(scene) =
-        Scene::load_with_overrides(&path, &[]).map_err(|e| eprintln!("referee: skipped: {e}"))
-    else {
+    let Some((p, st)) = dressed::dressed("referee", WARM) else {
         return;
     };
-    let Ok(mut p) = Pipeline::new(scene) else {
-        return;
-    };
-    let mut st = p.start();
-    let mut timers = Timers::default();
-    let warm = if cfg!(debug_assertions) || std::env::args().any(|a| a == "--test") {
-        2
-    } else {
-        WARM
-    };
-    for k in 1..warm {
-        p.advance(&mut st, p.frame_time(k), &mut timers);
-    }
     let x = p.surface.positions.clone();
     let tris = p.surface.triangles.clone();
     let mut referee = ExactCollider::new(&p.body_mesh, 0.003).expect("body");
