@@ -72,7 +72,7 @@ pub(super) fn section(r: &mut String, points: &[LayerPoint]) {
     let _ = writeln!(r, "\n## (h) The cloth against itself\n");
     let _ = writeln!(
         r,
-        "`[effects] self_collision` and `cloth_collision` under VBD, both off and both on (two garments in the layered scenes): the most crossing pairs of garment triangles in a frame (the referee, `tryon-pipeline/src/crossings.rs`), penetration into the body, stretch, and the cloth step's cost. The MakeHuman scenes run their first 90 frames (makehuman-layered-131: 60), the others their whole length.\n"
+        "`[effects] self_collision` and `cloth_collision` under VBD, both off and both on (two garments in the layered scenes): the most crossing pairs of garment triangles in a frame (the referee, `body-collide/src/crossings.rs`), penetration into the body, stretch, and the cloth step's cost. The MakeHuman scenes run their first 90 frames (makehuman-layered-131: 60), the others their whole length.\n"
     );
     let _ = writeln!(
         r,
