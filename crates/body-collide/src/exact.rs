@@ -269,6 +269,7 @@ impl Collider for ExactCollider {
         tryon_core::stages::Capabilities {
             sweep: true,
             pokes: true,
+            exact_distance: true,
             ..tryon_core::stages::Capabilities::NONE
         }
     }

@@ -13,6 +13,9 @@ pub struct Capabilities {
     pub sweep: bool,
     /// [`Collider::pokes`]: body vertices under cloth triangles.
     pub pokes: bool,
+    /// [`Collider::probe`]'s distances are the true distances to the body surface the swept
+    /// test uses, so a point moving less than its distance cannot reach the still body.
+    pub exact_distance: bool,
 }
 
 impl Capabilities {
@@ -22,6 +25,7 @@ impl Capabilities {
         pinch: false,
         sweep: false,
         pokes: false,
+        exact_distance: false,
     };
 
     /// The names of the capabilities `wanted` has and `self` lacks.

@@ -141,6 +141,12 @@ pub struct VbdSim {
     /// pinch ([`Collider::probe_opposite`]): held off both, it is squeezed between them.
     opposite: Vec<Option<Plane>>,
     probes: Vec<Probe>,
+    /// Per particle, its signed distance from the body at the step's start (infinite when the
+    /// collider knows none): a path shorter than that cannot cross the still body.
+    clear: Vec<Real>,
+    /// The swept test's share of the particles: where they started, where they ended, who.
+    #[serde(skip)]
+    swept_sub: (Vec<Vec3>, Vec<Vec3>, Vec<u32>),
     /// The particles with a contact plane this step, and their probes.
     near: Vec<u32>,
     near_probes: Vec<Probe>,
@@ -247,6 +253,8 @@ impl VbdSim {
             planes: vec![None; n],
             opposite: vec![None; n],
             probes: Vec::new(),
+            clear: vec![Real::INFINITY; n],
+            swept_sub: Default::default(),
             near: Vec::new(),
             near_probes: Vec::new(),
             all: (0..n as u32).collect(),
@@ -291,6 +299,7 @@ impl VbdSim {
         for i in 0..frame.positions.len() {
             let x = frame.positions[i];
             self.prev[i] = x;
+            self.clear[i] = self.probes.get(i).map_or(Real::INFINITY, |q| q.distance);
             self.planes[i] = self
                 .probes
                 .get(i)
@@ -573,5 +582,7 @@ impl ClothSolver for VbdSim {
 
 #[cfg(test)]
 mod layer_tests;
+#[cfg(test)]
+mod swept_tests;
 #[cfg(test)]
 mod tests;
