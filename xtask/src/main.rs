@@ -1,7 +1,8 @@
 //! cargo xtask: project automation. `ci` (fmt, clippy, tests, tidy), `bench`, `drape`, `tidy`,
-//! `tradeoff`, `outputs`, `kimono-targets`, `fuzz`, `viewer`.
+//! `tradeoff`, `ensemble`, `outputs`, `kimono-targets`, `fuzz`, `viewer`.
 
 mod drape;
+mod ensemble;
 mod fuzz;
 mod fuzz_mutate;
 mod outputs;
@@ -22,6 +23,10 @@ commands:
                      goes into docs/speed.md beside the previous one
   drape [N..] [--integrator rk4|symplectic_euler|all] [--frames F] [--trace] [--set KEY=VALUE] [--png FILE]
                      run the drape scene (release) and print ms/frame, stretch, penetration
+  ensemble [--save NAME] [--against OTHER] [--frames F]
+                     how a solver change is judged: the dress and the casual suit on both
+                     shared clips, three runs each with the damping moved by 1e-7 (release,
+                     every frame judged, two runs at a time); target/ensemble/NAME.{json,md}
   tradeoff [--quick] [--summary FILE]
                      what accuracy costs in time: collider, integrator, refinement and wrinkle
                      sweeps and P4's scene; report.md and SVG plots under target/tradeoff/
@@ -50,6 +55,7 @@ fn main() -> ExitCode {
         Some("ci") => ci(),
         Some("bench") => bench(&args[1..]),
         Some("drape") => drape::run_in_release(&args[1..]),
+        Some("ensemble") => ensemble::run(&args[1..]),
         Some("tidy") => tidy::run(),
         Some("fuzz") => fuzz::run(&args[1..]),
         Some("outputs") => outputs::run(&args[1..]),
