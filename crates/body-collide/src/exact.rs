@@ -206,12 +206,11 @@ impl ExactCollider {
     }
 
     /// [`ExactCollider::project_from`] for a caller that only needs the surface nearer than
-    /// `cutoff`: the hierarchy is searched only that far, so a point far from the body costs a
-    /// few boxes instead of a descent to its nearest face. A point with nothing within `cutoff`
-    /// is [`Near::Beyond`] when the hint's face says it is outside (its nearest feature's
-    /// pseudo-normal); when it says inside, or there is no hint, the whole body is searched, so
-    /// a point deep inside is still found. Whatever is found nearer than `cutoff` is the same
-    /// as the whole search's answer.
+    /// `cutoff`: the hierarchy is searched that far first. A point with nothing within `cutoff`
+    /// is searched in full, since only its nearest feature's pseudo-normal tells its side: it
+    /// is [`Near::Beyond`] when outside, found when inside (so a point deep inside is found
+    /// whatever its hint). The answer is the whole search's, with outside points farther than
+    /// `cutoff` reported as beyond it (callers skip far points by the memo's bound first).
     pub fn search(&self, p: &Vec3, hint: u32, cutoff: Real) -> Near {
         if !is_finite(p) {
             return Near::Invalid;
@@ -226,12 +225,16 @@ impl ExactCollider {
         let found = self.tree.nearest(p, bound, closest);
         let best = found.or(start.filter(|_| hint_d2 < cutoff * cutoff));
         let Some((face, nearest)) = best else {
-            return match start {
-                Some((f, (_, (q, bary)))) if (p - q).dot(&self.pseudo_normal(f, bary)) >= 0.0 => {
-                    Near::Beyond(cutoff)
-                }
-                _ if cutoff.is_finite() => self.search(p, hint, Real::INFINITY),
-                _ => Near::Invalid,
+            // Nothing within the cutoff: the side is known only from the nearest feature (a
+            // pseudo-normal says which side a point is on only at the point's nearest feature;
+            // the hint's face, from where the point was, said "outside" for a refined kimono
+            // vertex 32 mm inside the body), so the whole body is searched.
+            if !cutoff.is_finite() {
+                return Near::Invalid;
+            }
+            return match self.search(p, hint, Real::INFINITY) {
+                Near::Found(pr) if pr.distance >= cutoff => Near::Beyond(cutoff),
+                other => other,
             };
         };
         Near::Found(self.finish(p, face, nearest))

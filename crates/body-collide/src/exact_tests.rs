@@ -368,3 +368,35 @@ fn probes_within_a_reach_agree_with_the_whole_search_after_small_moves() {
         }
     }
 }
+
+#[test]
+fn a_point_inside_is_found_inside_whatever_face_its_search_starts_from() {
+    // A search cut off at 1 cm took a point with nothing that near for outside when the face it
+    // started from (where the point was last time) said so; but only the nearest feature's
+    // pseudo-normal tells the side, and on a body with folds another face can say "outside" for a
+    // point deep inside: a refined kimono vertex 32 mm inside the mannequin was left there.
+    let body = bumpy(2, 0.25, 5.0);
+    let col = ExactCollider::new(&body, 0.002).unwrap();
+    let mut checked = 0;
+    for k in 0..24 {
+        let a = k as Real * 0.7;
+        let dir = Vec3::new(
+            a.cos() * (1.3 * a).sin(),
+            (1.3 * a).cos(),
+            a.sin() * (1.3 * a).sin(),
+        );
+        let p = dir.normalize() * 0.3;
+        let whole = col.project(&p).unwrap().distance;
+        if whole > -0.02 {
+            continue;
+        }
+        checked += 1;
+        for hint in 0..body.faces.len() as u32 {
+            match col.search(&p, hint, 0.01) {
+                crate::exact::Near::Found(pr) => assert_eq!(pr.distance, whole, "hint {hint}"),
+                other => panic!("{p:?} is {whole} m inside; from face {hint}: {other:?}"),
+            }
+        }
+    }
+    assert!(checked > 10, "{checked} points deep inside");
+}
